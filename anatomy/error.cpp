@@ -1,0 +1,46 @@
+#include "anatomy/error.h"
+
+namespace rigbake {
+
+const std::vector<ErrorCodeInfo>& errorCodes() {
+  static const std::vector<ErrorCodeInfo> kCodes = {
+      {"USAGE", ExitCode::kUsage, "The command line is malformed or an option value is out of range."},
+      {"IO_FILE_NOT_FOUND", ExitCode::kIo, "An input file does not exist or cannot be opened."},
+      {"IO_WRITE_FAILED", ExitCode::kIo, "An output file could not be written or renamed into place."},
+      {"GLTF_PARSE_FAILED", ExitCode::kInvalidInput, "The file is not a readable glTF, GLB or VRM (syntax, truncation, bad buffers)."},
+      {"GLTF_NO_SKIN", ExitCode::kInvalidInput, "The glTF has no skin, so there is no skeleton to rig."},
+      {"GLTF_ACCESSOR_INVALID", ExitCode::kInvalidInput, "An accessor the pipeline needs has the wrong type, component type or range."},
+      {"GLTF_SKIN_INVALID", ExitCode::kInvalidInput, "A skin's joints or inverse bind matrices are inconsistent."},
+      {"JSON_PARSE_FAILED", ExitCode::kInvalidInput, "A JSON input (preset, map, muscle file) is not valid JSON."},
+      {"PRESET_INVALID", ExitCode::kInvalidInput, "A preset or naming map breaks its schema; the message gives the JSON pointer."},
+      {"MAP_NOT_FOUND", ExitCode::kInvalidInput, "A naming map named on the command line does not exist among the shipped maps."},
+      {"LANDMARK_UNRESOLVED", ExitCode::kInvalidInput, "A landmark the pipeline needs matches no joint and cannot be derived."},
+      {"PRESET_LANDMARK_UNKNOWN", ExitCode::kInvalidInput, "A preset formula names a landmark that is not a canonical landmark."},
+      {"MUSCLES_INVALID", ExitCode::kInvalidInput, "A muscle JSON file breaks the muscle schema."},
+      {"MUSCLES_MISMATCH", ExitCode::kInvalidInput, "A muscle JSON file names joints that the character does not have."},
+      {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
+  };
+  return kCodes;
+}
+
+namespace {
+std::string format(const std::string& code, const std::string& where, const std::string& message) {
+  return where.empty() ? code + ": " + message : code + " " + where + ": " + message;
+}
+}  // namespace
+
+Error::Error(std::string code, std::string where, const std::string& message)
+    : std::runtime_error(format(code, where, message)), code_(std::move(code)), where_(std::move(where)) {}
+
+ExitCode Error::exitCode() const {
+  for (const ErrorCodeInfo& info : errorCodes()) {
+    if (code_ == info.code) return info.exit;
+  }
+  return ExitCode::kInternal;
+}
+
+void fail(const std::string& code, const std::string& where, const std::string& message) {
+  throw Error(code, where, message);
+}
+
+}  // namespace rigbake

@@ -1,0 +1,46 @@
+// Errors a user can cause, each with a stable code (docs/errors.md lists them all).
+// A stage throws rigbake::Error once; cli/main.cpp catches it once, prints one line and exits
+// with the code's exit status. Codes are never renamed or reused.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace rigbake {
+
+// Documented exit statuses (docs/errors.md).
+enum class ExitCode : int {
+  kOk = 0,
+  kUsage = 1,
+  kIo = 2,
+  kInvalidInput = 3,
+  kValidationFailed = 4,
+  kInternal = 5,
+};
+
+struct ErrorCodeInfo {
+  const char* code;
+  ExitCode exit;
+  const char* meaning;
+};
+
+// Every user-facing error code, in the order they were introduced.
+const std::vector<ErrorCodeInfo>& errorCodes();
+
+class Error : public std::runtime_error {
+ public:
+  // `where` names the file and, when it helps, a JSON pointer or glTF path inside it.
+  Error(std::string code, std::string where, const std::string& message);
+  const std::string& code() const { return code_; }
+  const std::string& where() const { return where_; }
+  ExitCode exitCode() const;
+
+ private:
+  std::string code_;
+  std::string where_;
+};
+
+[[noreturn]] void fail(const std::string& code, const std::string& where, const std::string& message);
+
+}  // namespace rigbake

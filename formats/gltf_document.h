@@ -1,0 +1,32 @@
+// A loaded glTF/GLB/VRM file: the plain Character the stages work on, plus the parsed document kept
+// opaque so a writer can add to it without losing what rigbake does not model (materials, textures,
+// extensions, rigid meshes).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "anatomy/character.h"
+
+namespace tinygltf {
+class Model;
+}
+
+namespace rigbake {
+
+struct GltfDocument;  // wraps tinygltf::Model; defined in formats/gltf_read.cpp
+
+struct LoadedCharacter {
+  Character character;
+  std::shared_ptr<GltfDocument> document;
+};
+
+// Reads .glb, .gltf (external or embedded buffers) and .vrm (0.x and 1.0). Throws Error with
+// IO_FILE_NOT_FOUND, GLTF_PARSE_FAILED, GLTF_NO_SKIN, GLTF_SKIN_INVALID or GLTF_ACCESSOR_INVALID.
+LoadedCharacter loadCharacter(const std::string& path);
+
+// Access for formats/ writers only.
+tinygltf::Model& modelOf(GltfDocument& document);
+const tinygltf::Model& modelOf(const GltfDocument& document);
+
+}  // namespace rigbake

@@ -1,0 +1,412 @@
+// Loads a skinned character through tinygltf into plain rigbake data.
+// glTF 2.0 specification, "Skins": jointMatrix = globalJointTransform * inverseBindMatrix, and the
+// transform of the node that instantiates a skinned mesh is ignored. The bind pose in the scene is
+// therefore meshNodeWorld * inverse(inverseBindMatrix) (three.js: bindMatrix = mesh.matrixWorld).
+// VRM 0.x ("VRM" extension, humanoid.humanBones[] = {bone, node}) and VRM 1.0 ("VRMC_vrm",
+// humanoid.humanBones = {name: {node}}) give the humanoid mapping directly.
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <functional>
+#include <set>
+
+#include "anatomy/error.h"
+#include "formats/atomic_file.h"
+#include "formats/gltf_accessor.h"
+#include "formats/gltf_document.h"
+
+namespace rigbake {
+
+struct GltfDocument {
+  tinygltf::Model model;
+};
+
+tinygltf::Model& modelOf(GltfDocument& document) { return document.model; }
+const tinygltf::Model& modelOf(const GltfDocument& document) { return document.model; }
+
+namespace {
+
+// rigbake never decodes textures: it keeps the encoded bytes so that a writer can embed them as
+// they were.
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                    const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + size);
+  image->as_is = true;
+  return true;
+}
+
+std::string firstLine(const std::string& text) {
+  std::string line = text.substr(0, text.find('\n'));
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  return line.empty() ? "unknown parse error" : line;
+}
+
+std::string directoryOf(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
+}
+
+Trs nodeTrs(const tinygltf::Node& node) {
+  Trs trs;
+  if (node.matrix.size() == 16) {
+    Eigen::Matrix4d m;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m(r, c) = node.matrix[c * 4 + r];
+    Eigen::Affine3d affine(m);
+    Eigen::Matrix3d rotation, scaling;
+    affine.computeRotationScaling(&rotation, &scaling);
+    trs.translation = affine.translation();
+    trs.rotation = Eigen::Quaterniond(rotation);
+    trs.scale = scaling.diagonal();
+    return trs;
+  }
+  if (node.translation.size() == 3) trs.translation = {node.translation[0], node.translation[1], node.translation[2]};
+  if (node.rotation.size() == 4)
+    trs.rotation = Eigen::Quaterniond(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]);
+  if (node.scale.size() == 3) trs.scale = {node.scale[0], node.scale[1], node.scale[2]};
+  return trs;
+}
+
+Eigen::Affine3d nodeLocal(const tinygltf::Node& node) {
+  if (node.matrix.size() == 16) {
+    Eigen::Matrix4d m;
+    for (int c = 0; c < 4; ++c)
+      for (int r = 0; r < 4; ++r) m(r, c) = node.matrix[c * 4 + r];
+    return Eigen::Affine3d(m);
+  }
+  return nodeTrs(node).matrix();
+}
+
+struct NodeTree {
+  std::vector<int> parent;
+  std::vector<Eigen::Affine3d> world;
+  std::vector<int> dfs_order;  // nodes in scene traversal order, parents first
+};
+
+NodeTree buildNodeTree(const tinygltf::Model& model, const std::string& where) {
+  const int n = static_cast<int>(model.nodes.size());
+  NodeTree tree;
+  tree.parent.assign(n, -1);
+  tree.world.assign(n, Eigen::Affine3d::Identity());
+  for (int i = 0; i < n; ++i) {
+    for (int child : model.nodes[i].children) {
+      if (child < 0 || child >= n || tree.parent[child] != -1 || child == i)
+        fail("GLTF_PARSE_FAILED", where, "/nodes/" + std::to_string(i) + " has an invalid child " + std::to_string(child));
+      tree.parent[child] = i;
+    }
+  }
+  std::vector<char> visited(n, 0);
+  std::function<void(int)> visit = [&](int node) {
+    if (visited[node]) fail("GLTF_PARSE_FAILED", where, "the node hierarchy has a cycle at /nodes/" + std::to_string(node));
+    visited[node] = 1;
+    tree.world[node] = (tree.parent[node] >= 0 ? tree.world[tree.parent[node]] : Eigen::Affine3d::Identity()) *
+                       nodeLocal(model.nodes[node]);
+    tree.dfs_order.push_back(node);
+    for (int child : model.nodes[node].children) visit(child);
+  };
+  for (int i = 0; i < n; ++i) {
+    if (tree.parent[i] == -1) visit(i);
+  }
+  for (int i = 0; i < n; ++i) {
+    if (!visited[i]) fail("GLTF_PARSE_FAILED", where, "the node hierarchy has a cycle at /nodes/" + std::to_string(i));
+  }
+  return tree;
+}
+
+Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const std::string& where,
+                       std::vector<int>* joint_of_node) {
+  const int node_count = static_cast<int>(model.nodes.size());
+  // The world transform of the first node that instantiates each skin maps bind space to the scene.
+  std::vector<Eigen::Affine3d> skin_to_world(model.skins.size(), Eigen::Affine3d::Identity());
+  std::vector<char> skin_placed(model.skins.size(), 0);
+  for (int node : tree.dfs_order) {
+    int skin = model.nodes[node].skin;
+    if (skin >= 0 && skin < static_cast<int>(model.skins.size()) && !skin_placed[skin]) {
+      skin_to_world[skin] = tree.world[node];
+      skin_placed[skin] = 1;
+    }
+  }
+  // Bind pose of each joint node, from the first skin that lists it.
+  std::vector<char> is_joint(node_count, 0);
+  std::vector<Eigen::Affine3d> bind(node_count, Eigen::Affine3d::Identity());
+  for (size_t s = 0; s < model.skins.size(); ++s) {
+    const tinygltf::Skin& skin = model.skins[s];
+    std::string skin_where = "/skins/" + std::to_string(s);
+    AccessorData ibm;
+    if (skin.inverseBindMatrices >= 0) {
+      ibm = readAccessor(model, skin.inverseBindMatrices, where);
+      if (ibm.components != 16 || ibm.count < static_cast<int>(skin.joints.size()))
+        fail("GLTF_SKIN_INVALID", where, skin_where + "/inverseBindMatrices must hold one MAT4 per joint");
+    }
+    for (size_t k = 0; k < skin.joints.size(); ++k) {
+      int node = skin.joints[k];
+      if (node < 0 || node >= node_count)
+        fail("GLTF_SKIN_INVALID", where, skin_where + "/joints/" + std::to_string(k) + " is not a node");
+      if (is_joint[node]) continue;
+      is_joint[node] = 1;
+      Eigen::Matrix4d inverse_bind = Eigen::Matrix4d::Identity();
+      if (skin.inverseBindMatrices >= 0) {
+        for (int c = 0; c < 4; ++c)
+          for (int r = 0; r < 4; ++r) inverse_bind(r, c) = ibm.values[k * 16 + c * 4 + r];
+      }
+      if (std::abs(inverse_bind.determinant()) < 1e-30)
+        fail("GLTF_SKIN_INVALID", where, skin_where + "/inverseBindMatrices/" + std::to_string(k) + " is singular");
+      bind[node] = skin_to_world[s] * Eigen::Affine3d(inverse_bind.inverse());
+    }
+  }
+  Skeleton skeleton;
+  joint_of_node->assign(node_count, -1);
+  for (int node : tree.dfs_order) {
+    if (!is_joint[node]) continue;
+    int joint = skeleton.size();
+    (*joint_of_node)[node] = joint;
+    int ancestor = tree.parent[node];
+    while (ancestor >= 0 && !is_joint[ancestor]) ancestor = tree.parent[ancestor];
+    skeleton.names.push_back(model.nodes[node].name.empty() ? "node" + std::to_string(node) : model.nodes[node].name);
+    skeleton.parents.push_back(ancestor >= 0 ? (*joint_of_node)[ancestor] : -1);
+    skeleton.nodes.push_back(node);
+    skeleton.bind_world.push_back(bind[node]);
+    skeleton.rest_local.push_back(nodeTrs(model.nodes[node]));
+    // Root joints compose into their parent node; joints under a non-joint node inside the skeleton
+    // (rare) are treated the same way, with that node's rest world transform.
+    int direct_parent = tree.parent[node];
+    Eigen::Affine3d parent_world = direct_parent >= 0 ? tree.world[direct_parent] : Eigen::Affine3d::Identity();
+    if (ancestor >= 0 && direct_parent != ancestor) {
+      // Fold the non-joint nodes between the joint and its joint ancestor into the local transform.
+      Eigen::Affine3d between = tree.world[ancestor].inverse() * parent_world;
+      Eigen::Affine3d local = between * skeleton.rest_local.back().matrix();
+      Eigen::Matrix3d rotation, scaling;
+      local.computeRotationScaling(&rotation, &scaling);
+      skeleton.rest_local.back() = Trs{local.translation(), Eigen::Quaterniond(rotation), scaling.diagonal()};
+    }
+    skeleton.root_parent_world.push_back(ancestor >= 0 ? Eigen::Affine3d::Identity() : parent_world);
+  }
+  return skeleton;
+}
+
+std::vector<std::array<int, 3>> readTriangles(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                                              int vertex_count, const std::string& where) {
+  std::vector<int> indices;
+  if (primitive.indices >= 0) {
+    AccessorData data = readAccessor(model, primitive.indices, where);
+    indices.reserve(data.values.size());
+    for (double v : data.values) {
+      if (v < 0 || v >= vertex_count) fail("GLTF_ACCESSOR_INVALID", where, "a triangle index is out of range");
+      indices.push_back(static_cast<int>(v));
+    }
+  } else {
+    for (int i = 0; i < vertex_count; ++i) indices.push_back(i);
+  }
+  std::vector<std::array<int, 3>> triangles;
+  int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+  if (mode == TINYGLTF_MODE_TRIANGLES) {
+    for (size_t i = 0; i + 2 < indices.size(); i += 3) triangles.push_back({indices[i], indices[i + 1], indices[i + 2]});
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+    for (size_t i = 0; i + 2 < indices.size(); ++i) {
+      if (i % 2 == 0) triangles.push_back({indices[i], indices[i + 1], indices[i + 2]});
+      else triangles.push_back({indices[i + 1], indices[i], indices[i + 2]});
+    }
+  } else if (mode == TINYGLTF_MODE_TRIANGLE_FAN) {
+    for (size_t i = 1; i + 1 < indices.size(); ++i) triangles.push_back({indices[0], indices[i], indices[i + 1]});
+  }
+  return triangles;
+}
+
+void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skeleton& skeleton,
+                const std::vector<int>& joint_of_node, const std::string& where, Character* character) {
+  for (int node_index : tree.dfs_order) {
+    const tinygltf::Node& node = model.nodes[node_index];
+    if (node.mesh < 0) continue;
+    if (node.mesh >= static_cast<int>(model.meshes.size()))
+      fail("GLTF_PARSE_FAILED", where, "/nodes/" + std::to_string(node_index) + " refers to a missing mesh");
+    const tinygltf::Mesh& mesh = model.meshes[node.mesh];
+    const tinygltf::Skin* skin =
+        node.skin >= 0 && node.skin < static_cast<int>(model.skins.size()) ? &model.skins[node.skin] : nullptr;
+    int rigid_joint = -1;
+    if (!skin) {
+      for (int a = node_index; a >= 0 && rigid_joint < 0; a = tree.parent[a]) rigid_joint = joint_of_node[a];
+    }
+    // Rigid parts follow their joint from the rest pose to the bind pose.
+    Eigen::Affine3d to_world = tree.world[node_index];
+    if (rigid_joint >= 0) {
+      to_world = skeleton.bind_world[rigid_joint] * tree.world[skeleton.nodes[rigid_joint]].inverse() * tree.world[node_index];
+    }
+    for (size_t p = 0; p < mesh.primitives.size(); ++p) {
+      const tinygltf::Primitive& primitive = mesh.primitives[p];
+      int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+      if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN)
+        continue;
+      auto position_it = primitive.attributes.find("POSITION");
+      if (position_it == primitive.attributes.end()) continue;
+      MeshPart part;
+      part.name = mesh.name.empty() ? node.name : mesh.name;
+      part.gltf_mesh = node.mesh;
+      part.gltf_primitive = static_cast<int>(p);
+      part.gltf_node = node_index;
+      part.skinned = skin != nullptr;
+      part.rigid_joint = rigid_joint;
+      AccessorData positions = readAccessor(model, position_it->second, where);
+      if (positions.components != 3) fail("GLTF_ACCESSOR_INVALID", where, "POSITION must be VEC3");
+      Eigen::Affine3d placement = to_world;
+      if (skin) {
+        // Skinned vertices live in bind space; the scene places it with this node's world transform.
+        placement = tree.world[node_index];
+      }
+      part.positions.resize(positions.count);
+      for (int v = 0; v < positions.count; ++v) {
+        Eigen::Vector3d local(positions.values[v * 3], positions.values[v * 3 + 1], positions.values[v * 3 + 2]);
+        part.positions[v] = placement * local;
+      }
+      part.triangles = readTriangles(model, primitive, positions.count, where);
+      if (skin) {
+        for (int set = 0;; ++set) {
+          auto joints_it = primitive.attributes.find("JOINTS_" + std::to_string(set));
+          auto weights_it = primitive.attributes.find("WEIGHTS_" + std::to_string(set));
+          if (joints_it == primitive.attributes.end() || weights_it == primitive.attributes.end()) break;
+          part.influences_per_vertex += 4;
+        }
+        const int slots = part.influences_per_vertex;
+        part.joints.assign(static_cast<size_t>(positions.count) * slots, 0);
+        part.weights.assign(static_cast<size_t>(positions.count) * slots, 0.0);
+        for (int set = 0; set * 4 < slots; ++set) {
+          AccessorData joints = readAccessor(model, primitive.attributes.at("JOINTS_" + std::to_string(set)), where);
+          AccessorData weights = readAccessor(model, primitive.attributes.at("WEIGHTS_" + std::to_string(set)), where);
+          if (joints.components != 4 || weights.components != 4 || joints.count != positions.count ||
+              weights.count != positions.count)
+            fail("GLTF_ACCESSOR_INVALID", where, "JOINTS_/WEIGHTS_ must be VEC4 with one element per vertex");
+          for (int v = 0; v < positions.count; ++v) {
+            for (int k = 0; k < 4; ++k) {
+              double weight = weights.values[v * 4 + k];
+              int skin_joint = static_cast<int>(joints.values[v * 4 + k]);
+              size_t slot = static_cast<size_t>(v) * slots + set * 4 + k;
+              if (weight == 0.0) continue;
+              if (skin_joint < 0 || skin_joint >= static_cast<int>(skin->joints.size()))
+                fail("GLTF_ACCESSOR_INVALID", where, "a JOINTS_ index is outside the skin's joint list");
+              part.joints[slot] = joint_of_node[skin->joints[skin_joint]];
+              part.weights[slot] = weight;
+            }
+          }
+        }
+      }
+      character->meshes.push_back(std::move(part));
+    }
+  }
+}
+
+Interpolation interpolationOf(const std::string& name) {
+  if (name == "STEP") return Interpolation::kStep;
+  if (name == "CUBICSPLINE") return Interpolation::kCubicSpline;
+  return Interpolation::kLinear;
+}
+
+void readClips(const tinygltf::Model& model, const std::vector<int>& joint_of_node, const std::string& where,
+               Character* character) {
+  for (size_t a = 0; a < model.animations.size(); ++a) {
+    const tinygltf::Animation& animation = model.animations[a];
+    Clip clip;
+    clip.name = animation.name.empty() ? "animation" + std::to_string(a) : animation.name;
+    clip.gltf_animation = static_cast<int>(a);
+    for (const tinygltf::AnimationChannel& channel : animation.channels) {
+      if (channel.target_node < 0 || channel.target_node >= static_cast<int>(joint_of_node.size())) continue;
+      int joint = joint_of_node[channel.target_node];
+      if (joint < 0) continue;
+      Track track;
+      track.joint = joint;
+      if (channel.target_path == "translation") track.path = AnimatedPath::kTranslation;
+      else if (channel.target_path == "rotation") track.path = AnimatedPath::kRotation;
+      else if (channel.target_path == "scale") track.path = AnimatedPath::kScale;
+      else continue;
+      if (channel.sampler < 0 || channel.sampler >= static_cast<int>(animation.samplers.size()))
+        fail("GLTF_PARSE_FAILED", where, "/animations/" + std::to_string(a) + " has a channel without a sampler");
+      const tinygltf::AnimationSampler& sampler = animation.samplers[channel.sampler];
+      track.interpolation = interpolationOf(sampler.interpolation);
+      AccessorData input = readAccessor(model, sampler.input, where);
+      AccessorData output = readAccessor(model, sampler.output, where);
+      int width = track.path == AnimatedPath::kRotation ? 4 : 3;
+      int per_key = track.interpolation == Interpolation::kCubicSpline ? 3 : 1;
+      if (input.components != 1 || output.components != width || output.count != input.count * per_key)
+        fail("GLTF_ACCESSOR_INVALID", where,
+             "/animations/" + std::to_string(a) + " sampler " + std::to_string(channel.sampler) +
+                 " has input/output counts that do not match");
+      track.times = input.values;
+      track.values = output.values;
+      if (!track.times.empty()) clip.duration = std::max(clip.duration, track.times.back());
+      clip.tracks.push_back(std::move(track));
+    }
+    character->clips.push_back(std::move(clip));
+  }
+}
+
+void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint_of_node, Character* character) {
+  auto jointOf = [&](int node) { return node >= 0 && node < static_cast<int>(joint_of_node.size()) ? joint_of_node[node] : -1; };
+  auto vrm1 = model.extensions.find("VRMC_vrm");
+  if (vrm1 != model.extensions.end()) {
+    character->vrm_version = "1.0";
+    const tinygltf::Value& bones = vrm1->second.Get("humanoid").Get("humanBones");
+    if (bones.IsObject()) {
+      for (const std::string& key : bones.Keys()) {
+        const tinygltf::Value& node = bones.Get(key).Get("node");
+        if (node.IsNumber() || node.IsInt()) {
+          int joint = jointOf(node.GetNumberAsInt());
+          if (joint >= 0) character->vrm_humanoid[key] = joint;
+        }
+      }
+    }
+    return;
+  }
+  auto vrm0 = model.extensions.find("VRM");
+  if (vrm0 != model.extensions.end()) {
+    character->vrm_version = "0.x";
+    const tinygltf::Value& bones = vrm0->second.Get("humanoid").Get("humanBones");
+    if (bones.IsArray()) {
+      for (size_t i = 0; i < bones.ArrayLen(); ++i) {
+        const tinygltf::Value& bone = bones.Get(static_cast<int>(i));
+        const tinygltf::Value& name = bone.Get("bone");
+        const tinygltf::Value& node = bone.Get("node");
+        if (name.IsString() && (node.IsNumber() || node.IsInt())) {
+          int joint = jointOf(node.GetNumberAsInt());
+          if (joint >= 0) character->vrm_humanoid[name.Get<std::string>()] = joint;
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+LoadedCharacter loadCharacter(const std::string& path) {
+  std::string bytes = readFile(path);
+  auto document = std::make_shared<GltfDocument>();
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(keepImageBytes, nullptr);
+  std::string err, warn;
+  bool ok = false;
+  if (bytes.size() >= 4 && bytes.compare(0, 4, "glTF") == 0) {
+    ok = loader.LoadBinaryFromMemory(&document->model, &err, &warn,
+                                     reinterpret_cast<const unsigned char*>(bytes.data()),
+                                     static_cast<unsigned int>(bytes.size()), directoryOf(path));
+  } else {
+    size_t first = bytes.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
+    if (first == std::string::npos || bytes[first] != '{')
+      fail("GLTF_PARSE_FAILED", path, "not a glTF file (neither GLB magic 'glTF' nor a JSON object)");
+    ok = loader.LoadASCIIFromString(&document->model, &err, &warn, bytes.data(),
+                                    static_cast<unsigned int>(bytes.size()), directoryOf(path));
+  }
+  if (!ok) fail("GLTF_PARSE_FAILED", path, firstLine(err));
+  const tinygltf::Model& model = document->model;
+  if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
+
+  NodeTree tree = buildNodeTree(model, path);
+  std::vector<int> joint_of_node;
+  LoadedCharacter loaded;
+  Character& character = loaded.character;
+  character.source = path;
+  character.skeleton = buildSkeleton(model, tree, path, &joint_of_node);
+  readMeshes(model, tree, character.skeleton, joint_of_node, path, &character);
+  readClips(model, joint_of_node, path, &character);
+  readVrmHumanoid(model, joint_of_node, &character);
+  loaded.document = std::move(document);
+  return loaded;
+}
+
+}  // namespace rigbake
