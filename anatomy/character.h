@@ -2,9 +2,9 @@
 // pipeline/ read it and never see a tinygltf type.
 //
 // Space: everything is in the scene's world space at the bind pose, in the scene's units (glTF says
-// metres). A skinned mesh's bind space is mapped to the scene by the world transform of the node that
-// instantiates it (three.js' bindMatrix convention), so FBX2glTF files whose armature is scaled by 100
-// and Z-up exports both come out Y-up in metres.
+// metres). A skin's bind space is mapped to the scene through its root joint (world at rest times its
+// inverse bind matrix), so FBX2glTF files whose armature is scaled by 100 and Z-up exports both come
+// out Y-up in metres, as a glTF viewer shows them.
 #pragma once
 
 #include <Eigen/Geometry>

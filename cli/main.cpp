@@ -1,2 +1,40 @@
+// rigbake: rig build and bake pipeline for game characters. main only sets up the subcommands,
+// runs the chosen one and turns a rigbake::Error into one line on stderr and its exit status.
 #include <iostream>
-int main() { std::cout << "rigbake\n"; }
+
+#include "anatomy/error.h"
+#include "cli/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "rigbake builds joint-based muscle rigs for skinned humanoid glTF/GLB/VRM characters and bakes them.\n"
+      "Positions are in the scene's units (glTF: metres).\n\n"
+      "Typical run:\n"
+      "  rigbake sample -o mannequin.glb\n"
+      "  rigbake landmarks mannequin.glb\n"
+      "  rigbake place mannequin.glb -o muscles.json\n",
+      "rigbake"};
+  app.set_version_flag("--version", RIGBAKE_VERSION);
+  app.require_subcommand(1);
+  rigbake::cli::Runner runner;
+  rigbake::cli::addSampleCommand(app, &runner);
+  rigbake::cli::addLandmarksCommand(app, &runner);
+  rigbake::cli::addPlaceCommand(app, &runner);
+  rigbake::cli::addErrorsCommand(app, &runner);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::cerr << "USAGE: " << e.what() << " (see rigbake --help)\n";
+    return static_cast<int>(rigbake::ExitCode::kUsage);
+  }
+  try {
+    return runner ? runner() : 0;
+  } catch (const rigbake::Error& e) {
+    std::cerr << e.what() << "\n";
+    return static_cast<int>(e.exitCode());
+  } catch (const std::exception& e) {
+    std::cerr << "INTERNAL: " << e.what() << "\n";
+    return static_cast<int>(rigbake::ExitCode::kInternal);
+  }
+}

@@ -1,7 +1,7 @@
 // Loads a skinned character through tinygltf into plain rigbake data.
 // glTF 2.0 specification, "Skins": jointMatrix = globalJointTransform * inverseBindMatrix, and the
 // transform of the node that instantiates a skinned mesh is ignored. The bind pose in the scene is
-// therefore meshNodeWorld * inverse(inverseBindMatrix) (three.js: bindMatrix = mesh.matrixWorld).
+// therefore G * inverse(inverseBindMatrix), with G = world(root joint) * IBM(root joint) at rest.
 // VRM 0.x ("VRM" extension, humanoid.humanBones[] = {bone, node}) and VRM 1.0 ("VRMC_vrm",
 // humanoid.humanBones = {name: {node}}) give the humanoid mapping directly.
 #include <tiny_gltf.h>
@@ -114,16 +114,33 @@ NodeTree buildNodeTree(const tinygltf::Model& model, const std::string& where) {
 }
 
 Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const std::string& where,
-                       std::vector<int>* joint_of_node) {
+                       std::vector<int>* joint_of_node, std::vector<Eigen::Affine3d>* skin_placement) {
   const int node_count = static_cast<int>(model.nodes.size());
-  // The world transform of the first node that instantiates each skin maps bind space to the scene.
+  // Each skin's bind space is mapped to the scene by G = world(root joint at rest) * IBM(root joint):
+  // the skinned vertex at rest is sum_j w_j * world_j * IBM_j * v, which is G * v wherever the rest
+  // pose is the bind pose. The root joint is used because files whose rest pose is an animation frame
+  // (RobotExpressive, the Quaternius exports) still keep their root at the bind pose.
   std::vector<Eigen::Affine3d> skin_to_world(model.skins.size(), Eigen::Affine3d::Identity());
-  std::vector<char> skin_placed(model.skins.size(), 0);
-  for (int node : tree.dfs_order) {
-    int skin = model.nodes[node].skin;
-    if (skin >= 0 && skin < static_cast<int>(model.skins.size()) && !skin_placed[skin]) {
-      skin_to_world[skin] = tree.world[node];
-      skin_placed[skin] = 1;
+  for (size_t s = 0; s < model.skins.size(); ++s) {
+    const tinygltf::Skin& skin = model.skins[s];
+    if (skin.joints.empty() || skin.inverseBindMatrices < 0) continue;
+    std::vector<char> in_skin(node_count, 0);
+    for (int node : skin.joints) {
+      if (node >= 0 && node < node_count) in_skin[node] = 1;
+    }
+    for (size_t k = 0; k < skin.joints.size(); ++k) {
+      int node = skin.joints[k];
+      if (node < 0 || node >= node_count) break;  // reported below
+      int ancestor = tree.parent[node];
+      while (ancestor >= 0 && !in_skin[ancestor]) ancestor = tree.parent[ancestor];
+      if (ancestor >= 0) continue;
+      AccessorData ibm = readAccessor(model, skin.inverseBindMatrices, where);
+      if (ibm.components != 16 || ibm.count <= static_cast<int>(k)) break;  // reported below
+      Eigen::Matrix4d inverse_bind;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) inverse_bind(r, c) = ibm.values[k * 16 + c * 4 + r];
+      skin_to_world[s] = tree.world[node] * Eigen::Affine3d(inverse_bind);
+      break;
     }
   }
   // Bind pose of each joint node, from the first skin that lists it.
@@ -154,6 +171,7 @@ Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const
       bind[node] = skin_to_world[s] * Eigen::Affine3d(inverse_bind.inverse());
     }
   }
+  *skin_placement = skin_to_world;
   Skeleton skeleton;
   joint_of_node->assign(node_count, -1);
   for (int node : tree.dfs_order) {
@@ -213,7 +231,8 @@ std::vector<std::array<int, 3>> readTriangles(const tinygltf::Model& model, cons
 }
 
 void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skeleton& skeleton,
-                const std::vector<int>& joint_of_node, const std::string& where, Character* character) {
+                const std::vector<int>& joint_of_node, const std::vector<Eigen::Affine3d>& skin_placement,
+                const std::string& where, Character* character) {
   for (int node_index : tree.dfs_order) {
     const tinygltf::Node& node = model.nodes[node_index];
     if (node.mesh < 0) continue;
@@ -249,8 +268,8 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
       if (positions.components != 3) fail("GLTF_ACCESSOR_INVALID", where, "POSITION must be VEC3");
       Eigen::Affine3d placement = to_world;
       if (skin) {
-        // Skinned vertices live in bind space; the scene places it with this node's world transform.
-        placement = tree.world[node_index];
+        // Skinned vertices live in bind space (glTF ignores the mesh node's own transform).
+        placement = skin_placement[node.skin];
       }
       part.positions.resize(positions.count);
       for (int v = 0; v < positions.count; ++v) {
@@ -398,11 +417,12 @@ LoadedCharacter loadCharacter(const std::string& path) {
 
   NodeTree tree = buildNodeTree(model, path);
   std::vector<int> joint_of_node;
+  std::vector<Eigen::Affine3d> skin_placement;
   LoadedCharacter loaded;
   Character& character = loaded.character;
   character.source = path;
-  character.skeleton = buildSkeleton(model, tree, path, &joint_of_node);
-  readMeshes(model, tree, character.skeleton, joint_of_node, path, &character);
+  character.skeleton = buildSkeleton(model, tree, path, &joint_of_node, &skin_placement);
+  readMeshes(model, tree, character.skeleton, joint_of_node, skin_placement, path, &character);
   readClips(model, joint_of_node, path, &character);
   readVrmHumanoid(model, joint_of_node, &character);
   loaded.document = std::move(document);

@@ -1,0 +1,97 @@
+#include "anatomy/placement.h"
+
+#include <map>
+
+#include "anatomy/error.h"
+#include "anatomy/formula_eval.h"
+
+namespace rigbake {
+
+MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector3d& world) {
+  MuscleLocator locator;
+  locator.world = world;
+  locator.joint = joint;
+  locator.local = skeleton.bind_world[joint].inverse() * world;
+  return locator;
+}
+
+namespace {
+
+// The first attach landmark the skeleton resolves (the talk's twist joints, else the arm joints).
+std::string chooseAttach(const std::vector<std::string>& candidates, const LandmarkSet& landmarks,
+                         const std::string& side, const MusclePreset& preset, const PresetPart& part,
+                         const char* which) {
+  for (const std::string& candidate : candidates) {
+    if (landmarks.has(sidedName(candidate, side))) return candidate;
+  }
+  std::string list;
+  for (const std::string& candidate : candidates) list += (list.empty() ? "" : ", ") + sidedName(candidate, side);
+  fail("LANDMARK_UNRESOLVED", preset.file + "#" + part.pointer + "/" + which,
+       "no attach landmark of " + part.name + " is resolved (tried: " + list + ")");
+}
+
+// The landmark on the other side: clavicle_l <-> clavicle_r; central landmarks are their own twin.
+std::string twinLandmark(const std::string& name) {
+  if (name.size() > 2 && name.compare(name.size() - 2, 2, "_l") == 0) return name.substr(0, name.size() - 2) + "_r";
+  if (name.size() > 2 && name.compare(name.size() - 2, 2, "_r") == 0) return name.substr(0, name.size() - 2) + "_l";
+  return name;
+}
+
+}  // namespace
+
+MusclePart mirrorPart(const MusclePart& left, const Skeleton& skeleton, const LandmarkSet& landmarks,
+                      const std::string& origin_landmark, const std::string& insertion_landmark) {
+  const BodyFrame& body = landmarks.body;
+  MusclePart right = left;
+  right.side = "Right";
+  int origin_joint = landmarks.get(twinLandmark(origin_landmark)).joint;
+  int insertion_joint = landmarks.get(twinLandmark(insertion_landmark)).joint;
+  right.origin = locatorOn(skeleton, origin_joint, body.mirror(left.origin.world));
+  right.insertion = locatorOn(skeleton, insertion_joint, body.mirror(left.insertion.world));
+  right.driver = locatorOn(skeleton, origin_joint, body.mirror(left.driver.world));
+  return right;
+}
+
+MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks, const MusclePreset& preset,
+                       Sides sides) {
+  const Skeleton& skeleton = character.skeleton;
+  MuscleSet set;
+  size_t slash = character.source.find_last_of('/');
+  set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
+  set.body_height = landmarks.body.height;
+  const double scale = landmarks.body.height / preset.reference_height;
+
+  std::map<std::string, Eigen::Vector3d> placed;
+  std::vector<MusclePart> lefts, rights;
+  for (const PresetPart& spec : preset.parts) {
+    std::string origin_attach = sidedName(chooseAttach(spec.origin_attach, landmarks, "l", preset, spec, "origin_attach"), "l");
+    std::string insertion_attach =
+        sidedName(chooseAttach(spec.insertion_attach, landmarks, "l", preset, spec, "insertion_attach"), "l");
+    FormulaContext context{&skeleton, &landmarks, "l", preset.reference_height, &placed, preset.file};
+    Eigen::Vector3d origin = evaluateFormula(spec.origin, context);
+    placed[spec.name + ".origin"] = origin;
+    Eigen::Vector3d insertion = evaluateFormula(spec.insertion, context);
+    placed[spec.name + ".insertion"] = insertion;
+    Eigen::Vector3d driver = spec.has_driver ? evaluateFormula(spec.driver, context) : (origin + insertion) / 2.0;
+
+    MusclePart part;
+    part.group = spec.group;
+    part.name = spec.name;
+    part.side = "Left";
+    int origin_joint = landmarks.get(origin_attach).joint;
+    part.origin = locatorOn(skeleton, origin_joint, origin);
+    part.insertion = locatorOn(skeleton, landmarks.get(insertion_attach).joint, insertion);
+    part.driver = locatorOn(skeleton, origin_joint, driver);
+    part.compression = spec.compression;
+    part.stretch = spec.stretch;
+    part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
+    part.weight_radius = spec.weight_radius_ref_m * scale;
+    if (sides != Sides::kLeft) rights.push_back(mirrorPart(part, skeleton, landmarks, origin_attach, insertion_attach));
+    lefts.push_back(std::move(part));
+  }
+  if (sides != Sides::kRight) set.parts.insert(set.parts.end(), lefts.begin(), lefts.end());
+  set.parts.insert(set.parts.end(), rights.begin(), rights.end());
+  return set;
+}
+
+}  // namespace rigbake

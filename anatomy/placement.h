@@ -1,0 +1,28 @@
+// Places a muscle preset's locators on a resolved skeleton, left side first, and mirrors them to the
+// right across the body's sagittal plane (the talk: TrapezusMuscles(side='Right').mirror(trapBuilder)).
+#pragma once
+
+#include <string>
+
+#include "anatomy/landmarks.h"
+#include "anatomy/muscle_set.h"
+#include "anatomy/presets.h"
+
+namespace rigbake {
+
+enum class Sides { kLeft, kRight, kBoth };
+
+// Throws LANDMARK_UNRESOLVED when an attach landmark or a formula input is missing, naming the
+// preset file and JSON pointer.
+MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks, const MusclePreset& preset,
+                       Sides sides);
+
+// The right-side twin of a left part: positions reflected across the sagittal plane, attach joints
+// swapped for their right twins (central joints stay).
+MusclePart mirrorPart(const MusclePart& left, const Skeleton& skeleton, const LandmarkSet& landmarks,
+                      const std::string& origin_landmark, const std::string& insertion_landmark);
+
+// Re-expresses a world position in a joint's bind frame.
+MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector3d& world);
+
+}  // namespace rigbake

@@ -1,0 +1,68 @@
+// Anatomy as data: the plain structs that presets/*.json are parsed into (formats/preset_json.cpp
+// parses them strictly). Adding a muscle or a skeleton naming needs only a JSON file.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "anatomy/point_formula.h"
+
+namespace rigbake {
+
+// presets/skeletons/*.json: how one naming convention spells the canonical landmarks.
+struct NamingMap {
+  std::string name;
+  std::string file;
+  std::string description;
+  // "names": match joint names; "vrm_humanoid": match the VRM extension's humanoid bone names.
+  std::string match = "names";
+  // Prefixes removed from joint names before matching (e.g. "mixamorig:"). Matching ignores case.
+  std::vector<std::string> strip_prefixes;
+  // Tokens "{side}" stands for, per side ("l", "r"): e.g. {"l": ["Left"], "r": ["Right"]}.
+  std::map<std::string, std::vector<std::string>> side_tokens;
+  // Canonical landmark (central name, or sided base name) -> candidate joint names, best first.
+  std::map<std::string, std::vector<std::string>> landmarks;
+};
+
+// presets/landmarks.json: how a landmark that a skeleton lacks is derived from the ones it has.
+struct LandmarkDerivation {
+  std::string landmark;  // central name or sided base name
+  PointFormula formula;
+  std::string rides_on;  // landmark whose joint carries the derived point
+  std::string pointer;
+};
+
+struct LandmarkRules {
+  std::string file;
+  double reference_height = 1.8;
+  std::vector<LandmarkDerivation> derivations;  // in evaluation order
+};
+
+// presets/muscles/*.json: one entry per muscle part, left side; the right side is mirrored.
+struct PresetPart {
+  std::string group;
+  std::string name;
+  // Attach landmarks, best first: the first that the skeleton resolves is used (the talk attaches
+  // the biceps to the twist joints; skeletons without them fall back to the arm joints).
+  std::vector<std::string> origin_attach;
+  std::vector<std::string> insertion_attach;
+  PointFormula origin;
+  PointFormula insertion;
+  bool has_driver = false;  // absent: the driver rests at the origin-insertion midpoint
+  PointFormula driver;
+  double compression = 0.5;
+  double stretch = 1.5;
+  double bulge[2] = {0.0, 0.0};
+  double weight_radius_ref_m = 0.0;  // 0: derive from the body measure
+  std::string pointer;
+};
+
+struct MusclePreset {
+  std::string name;
+  std::string file;
+  double reference_height = 1.8;
+  std::vector<PresetPart> parts;
+};
+
+}  // namespace rigbake

@@ -1,0 +1,42 @@
+#include "anatomy/surface_distance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rigbake {
+
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denominator = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denominator) + ac * (vc * denominator);
+}
+
+double distanceToBodySurface(const Character& character, const Eigen::Vector3d& point) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const MeshPart& part : character.meshes) {
+    if (!part.skinned && part.rigid_joint < 0) continue;
+    for (const auto& t : part.triangles) {
+      const Eigen::Vector3d q = closestPointOnTriangle(point, part.positions[t[0]], part.positions[t[1]], part.positions[t[2]]);
+      best = std::min(best, (q - point).squaredNorm());
+    }
+  }
+  return std::sqrt(best);
+}
+
+}  // namespace rigbake

@@ -1,0 +1,169 @@
+#include "formats/muscle_json.h"
+
+#include <algorithm>
+#include <map>
+#include <tuple>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/error.h"
+#include "anatomy/placement.h"
+#include "formats/json_reader.h"
+
+namespace rigbake {
+namespace {
+
+nlohmann::json vectorJson(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+
+nlohmann::json locatorJson(const MuscleLocator& locator, const Skeleton& skeleton) {
+  return {{"joint", skeleton.names[locator.joint]}, {"local", vectorJson(locator.local)}};
+}
+
+Eigen::Vector3d readVector(const JsonReader& in) {
+  if (in.arraySize() != 3) in.fail("must be [x, y, z]");
+  return {in.at(0).asNumber(), in.at(1).asNumber(), in.at(2).asNumber()};
+}
+
+const char* kCode = "MUSCLES_INVALID";
+
+}  // namespace
+
+std::string muscleJson(const MuscleSet& muscles, const Skeleton& skeleton, const std::string& preset_name) {
+  nlohmann::json root = nlohmann::json::object();
+  nlohmann::json parts = nlohmann::json::object();
+  for (const MusclePart& part : muscles.parts) {
+    std::string full = part.fullName();
+    nlohmann::json& side = root[part.group][part.side];
+    side[full + "_muscleOrigin"] = vectorJson(part.origin.world);
+    side[full + "_muscleInsertion"] = vectorJson(part.insertion.world);
+    side[full + "_muscleDriver"] = vectorJson(part.driver.world);
+    parts[full] = {
+        {"group", part.group},
+        {"part", part.name},
+        {"side", part.side},
+        {"compression", part.compression},
+        {"stretch", part.stretch},
+        {"bulge", {part.bulge.x(), part.bulge.y()}},
+        {"weight_radius", part.weight_radius},
+        {"origin", locatorJson(part.origin, skeleton)},
+        {"insertion", locatorJson(part.insertion, skeleton)},
+        {"driver", locatorJson(part.driver, skeleton)},
+    };
+  }
+  root["rigbake"] = {
+      {"schema_version", kMuscleSchemaVersion},
+      {"units", "m"},
+      {"character", muscles.character},
+      {"preset", preset_name},
+      {"body_height", muscles.body_height},
+      {"muscles", parts},
+  };
+  return root.dump(2) + "\n";
+}
+
+MuscleSet readMuscleJson(const std::string& path, const Character& character, const LandmarkSet& landmarks,
+                         const MusclePreset& preset) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", kCode);
+  in.requireObject();
+  const Skeleton& skeleton = character.skeleton;
+  MuscleSet set;
+  size_t slash = character.source.find_last_of('/');
+  set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
+  set.body_height = landmarks.body.height;
+
+  if (in.has("rigbake")) {
+    JsonReader block = in.at("rigbake");
+    block.allowKeys({"schema_version", "units", "character", "preset", "body_height", "muscles"});
+    int version = block.at("schema_version").asInt();
+    if (version != kMuscleSchemaVersion)
+      block.at("schema_version").fail("unsupported schema version " + std::to_string(version) + " (this rigbake reads " +
+                                      std::to_string(kMuscleSchemaVersion) + ")");
+    if (block.at("units").asString() != "m") block.at("units").fail("units must be \"m\"");
+    JsonReader muscles = block.at("muscles");
+    for (const std::string& full : muscles.keys()) {
+      JsonReader item = muscles.at(full);
+      item.allowKeys({"group", "part", "side", "compression", "stretch", "bulge", "weight_radius", "origin", "insertion",
+                      "driver"});
+      MusclePart part;
+      part.group = item.at("group").asString();
+      part.name = item.at("part").asString();
+      part.side = item.at("side").asString();
+      if (part.side != "Left" && part.side != "Right") item.at("side").fail("must be \"Left\" or \"Right\"");
+      if (part.fullName() != full) item.fail("key must be side + part, i.e. '" + part.fullName() + "'");
+      part.compression = item.at("compression").asNumber();
+      part.stretch = item.at("stretch").asNumber();
+      if (!(part.compression > 0 && part.compression <= 1)) item.at("compression").fail("must be in (0, 1]");
+      if (!(part.stretch >= 1)) item.at("stretch").fail("must be at least 1");
+      JsonReader bulge = item.at("bulge");
+      if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
+      part.bulge = {bulge.at(0).asNumber(), bulge.at(1).asNumber()};
+      part.weight_radius = item.has("weight_radius") ? item.at("weight_radius").asNumber() : 0.0;
+      for (auto [key, locator] : {std::pair<const char*, MuscleLocator*>{"origin", &part.origin},
+                                  {"insertion", &part.insertion},
+                                  {"driver", &part.driver}}) {
+        JsonReader loc = item.at(key);
+        loc.allowKeys({"joint", "local"});
+        std::string joint_name = loc.at("joint").asString();
+        int joint = skeleton.find(joint_name);
+        if (joint < 0)
+          rigbake::fail("MUSCLES_MISMATCH", path + "#" + loc.at("joint").pointer(),
+                        "joint '" + joint_name + "' is not in " + set.character + " (is this muscle file for another character? use rigbake retarget)");
+        Eigen::Vector3d local = readVector(loc.at("local"));
+        *locator = locatorOn(skeleton, joint, skeleton.bind_world[joint] * local);
+      }
+      set.parts.push_back(std::move(part));
+    }
+    // Stable order: the preset's order, left before right, then anything the preset lacks by name.
+    std::map<std::string, int> rank;
+    for (size_t i = 0; i < preset.parts.size(); ++i) rank[preset.parts[i].name] = static_cast<int>(i);
+    std::stable_sort(set.parts.begin(), set.parts.end(), [&](const MusclePart& a, const MusclePart& b) {
+      auto key = [&](const MusclePart& p) {
+        auto it = rank.find(p.name);
+        return std::make_tuple(p.side == "Left" ? 0 : 1, it == rank.end() ? 1 << 20 : it->second, p.name);
+      };
+      return key(a) < key(b);
+    });
+    return set;
+  }
+
+  // The talk's positions-only shape: attach joints come from the preset part of the same name.
+  const double scale = landmarks.body.height / preset.reference_height;
+  for (const char* side_name : {"Left", "Right"}) {
+    std::string side = side_name == std::string("Left") ? "l" : "r";
+    for (const PresetPart& spec : preset.parts) {
+      if (!in.has(spec.group) || !in.at(spec.group).has(side_name)) continue;
+      JsonReader group = in.at(spec.group).at(side_name);
+      std::string full = side_name + spec.name;
+      if (!group.has(full + "_muscleOrigin") && !group.has(full + "_muscleInsertion")) continue;
+      auto attach = [&](const std::vector<std::string>& candidates) {
+        for (const std::string& c : candidates) {
+          if (landmarks.has(sidedName(c, side))) return landmarks.get(sidedName(c, side)).joint;
+        }
+        rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
+                      "no attach landmark of " + full + " is resolved on " + set.character);
+      };
+      MusclePart part;
+      part.group = spec.group;
+      part.name = spec.name;
+      part.side = side_name;
+      int origin_joint = attach(spec.origin_attach);
+      Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
+      Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
+      Eigen::Vector3d driver =
+          group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
+      part.origin = locatorOn(skeleton, origin_joint, origin);
+      part.insertion = locatorOn(skeleton, attach(spec.insertion_attach), insertion);
+      part.driver = locatorOn(skeleton, origin_joint, driver);
+      part.compression = spec.compression;
+      part.stretch = spec.stretch;
+      part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
+      part.weight_radius = spec.weight_radius_ref_m * scale;
+      set.parts.push_back(std::move(part));
+    }
+  }
+  if (set.parts.empty())
+    rigbake::fail(kCode, path, "no muscle part of preset '" + preset.name + "' found (neither a rigbake block nor talk-shaped groups)");
+  return set;
+}
+
+}  // namespace rigbake

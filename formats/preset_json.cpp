@@ -1,0 +1,218 @@
+#include "formats/preset_json.h"
+
+#include <algorithm>
+#include <dirent.h>
+
+#include "anatomy/error.h"
+#include "formats/json_reader.h"
+
+namespace rigbake {
+namespace {
+
+const char* kCode = "PRESET_INVALID";
+
+std::string baseName(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
+void requireLandmark(const JsonReader& where, const std::string& name) {
+  if (!isCanonicalLandmark(name)) {
+    std::string known;
+    for (const std::string& central : centralLandmarks()) known += central + " ";
+    for (const std::string& sided : sidedLandmarks()) known += sided + " ";
+    where.fail("'" + name + "' is not a canonical landmark (known: " + known + "; sided names may end in _l or _r)");
+  }
+}
+
+PointFormula readFormula(const JsonReader& in) {
+  in.requireObject();
+  PointFormula formula;
+  formula.pointer = in.pointer();
+  if (in.has("at")) {
+    in.allowKeys({"at"});
+    formula.kind = PointFormula::Kind::kAt;
+    formula.name = in.at("at").asString();
+    requireLandmark(in.at("at"), formula.name);
+  } else if (in.has("mean")) {
+    in.allowKeys({"mean"});
+    formula.kind = PointFormula::Kind::kMean;
+    JsonReader items = in.at("mean");
+    if (items.arraySize() < 1) items.fail("needs at least one point");
+    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i)));
+  } else if (in.has("lerp")) {
+    in.allowKeys({"lerp", "t"});
+    formula.kind = PointFormula::Kind::kLerp;
+    JsonReader items = in.at("lerp");
+    if (items.arraySize() != 2) items.fail("needs exactly two points [A, B]");
+    formula.args = {readFormula(items.at(0)), readFormula(items.at(1))};
+    formula.t = in.at("t").asNumber();
+  } else if (in.has("sum")) {
+    in.allowKeys({"sum"});
+    formula.kind = PointFormula::Kind::kSum;
+    JsonReader items = in.at("sum");
+    if (items.arraySize() < 1) items.fail("needs at least one term");
+    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i)));
+  } else if (in.has("dir")) {
+    in.allowKeys({"dir", "ref_m"});
+    formula.kind = PointFormula::Kind::kDir;
+    formula.name = in.at("dir").asString();
+    static const std::vector<std::string> kDirections = {"up", "down", "forward", "back", "lateral", "medial"};
+    if (std::find(kDirections.begin(), kDirections.end(), formula.name) == kDirections.end())
+      in.at("dir").fail("unknown direction '" + formula.name + "' (up, down, forward, back, lateral, medial)");
+    formula.ref_m = in.at("ref_m").asNumber();
+  } else if (in.has("joint_axis")) {
+    in.allowKeys({"joint_axis", "axis", "ref_m"});
+    formula.kind = PointFormula::Kind::kJointAxis;
+    formula.name = in.at("joint_axis").asString();
+    requireLandmark(in.at("joint_axis"), formula.name);
+    formula.axis = in.at("axis").asString();
+    if (formula.axis != "x" && formula.axis != "y" && formula.axis != "z") in.at("axis").fail("must be x, y or z");
+    formula.ref_m = in.at("ref_m").asNumber();
+  } else if (in.has("mix")) {
+    in.allowKeys({"mix"});
+    formula.kind = PointFormula::Kind::kMix;
+    JsonReader mix = in.at("mix");
+    mix.allowKeys({"lateral", "up", "forward"});
+    formula.args = {readFormula(mix.at("lateral")), readFormula(mix.at("up")), readFormula(mix.at("forward"))};
+  } else if (in.has("locator")) {
+    in.allowKeys({"locator"});
+    formula.kind = PointFormula::Kind::kLocator;
+    formula.name = in.at("locator").asString();
+  } else {
+    in.fail("a point formula needs one of: at, mean, lerp, sum, dir, joint_axis, mix, locator");
+  }
+  return formula;
+}
+
+}  // namespace
+
+NamingMap readNamingMap(const std::string& path) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", kCode);
+  in.allowKeys({"$schema", "name", "description", "match", "strip_prefixes", "side_tokens", "landmarks"});
+  NamingMap map;
+  map.file = path;
+  map.name = in.has("name") ? in.at("name").asString() : baseName(path);
+  if (in.has("description")) map.description = in.at("description").asString();
+  if (in.has("match")) {
+    map.match = in.at("match").asString();
+    if (map.match != "names" && map.match != "vrm_humanoid") in.at("match").fail("must be 'names' or 'vrm_humanoid'");
+  }
+  if (in.has("strip_prefixes")) map.strip_prefixes = in.at("strip_prefixes").asStringList();
+  if (in.has("side_tokens")) {
+    JsonReader sides = in.at("side_tokens");
+    sides.allowKeys({"l", "r"});
+    for (const std::string& side : sides.keys()) map.side_tokens[side] = sides.at(side).asStringList();
+  }
+  JsonReader landmarks = in.at("landmarks");
+  for (const std::string& key : landmarks.keys()) {
+    requireLandmark(landmarks, key);
+    map.landmarks[key] = landmarks.at(key).asStringList();
+    bool uses_side = false;
+    for (const std::string& pattern : map.landmarks[key]) uses_side |= pattern.find("{side}") != std::string::npos;
+    if (uses_side && (map.side_tokens["l"].empty() || map.side_tokens["r"].empty()))
+      landmarks.at(key).fail("uses {side} but side_tokens does not define both 'l' and 'r'");
+  }
+  return map;
+}
+
+std::vector<NamingMap> readNamingMaps(const std::string& directory) {
+  std::vector<std::string> files;
+  if (DIR* dir = opendir(directory.c_str())) {
+    while (dirent* entry = readdir(dir)) {
+      std::string name = entry->d_name;
+      if (name.size() > 5 && name.compare(name.size() - 5, 5, ".json") == 0) files.push_back(directory + "/" + name);
+    }
+    closedir(dir);
+  } else {
+    fail("IO_FILE_NOT_FOUND", directory, "the naming map directory cannot be read");
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<NamingMap> maps;
+  for (const std::string& file : files) maps.push_back(readNamingMap(file));
+  return maps;
+}
+
+LandmarkRules readLandmarkRules(const std::string& path) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", kCode);
+  in.allowKeys({"$schema", "description", "reference_height", "derivations"});
+  LandmarkRules rules;
+  rules.file = path;
+  if (in.has("reference_height")) rules.reference_height = in.at("reference_height").asNumber();
+  JsonReader derivations = in.at("derivations");
+  for (size_t i = 0; i < derivations.arraySize(); ++i) {
+    JsonReader item = derivations.at(i);
+    item.allowKeys({"landmark", "formula", "rides_on", "why"});
+    LandmarkDerivation derivation;
+    derivation.pointer = item.pointer();
+    derivation.landmark = item.at("landmark").asString();
+    requireLandmark(item.at("landmark"), derivation.landmark);
+    derivation.formula = readFormula(item.at("formula"));
+    derivation.rides_on = item.at("rides_on").asString();
+    requireLandmark(item.at("rides_on"), derivation.rides_on);
+    rules.derivations.push_back(std::move(derivation));
+  }
+  return rules;
+}
+
+MusclePreset readMusclePreset(const std::string& path) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", kCode);
+  in.allowKeys({"$schema", "name", "description", "reference_height", "muscles"});
+  MusclePreset preset;
+  preset.file = path;
+  preset.name = in.has("name") ? in.at("name").asString() : baseName(path);
+  if (in.has("reference_height")) {
+    preset.reference_height = in.at("reference_height").asNumber();
+    if (preset.reference_height <= 0) in.at("reference_height").fail("must be positive");
+  }
+  JsonReader muscles = in.at("muscles");
+  if (muscles.arraySize() == 0) muscles.fail("must list at least one muscle part");
+  for (size_t i = 0; i < muscles.arraySize(); ++i) {
+    JsonReader item = muscles.at(i);
+    item.allowKeys({"group", "name", "why", "origin_attach", "insertion_attach", "origin", "insertion", "driver",
+                    "compression", "stretch", "bulge", "weight_radius_ref_m"});
+    PresetPart part;
+    part.pointer = item.pointer();
+    part.group = item.at("group").asString();
+    part.name = item.at("name").asString();
+    for (const PresetPart& earlier : preset.parts) {
+      if (earlier.name == part.name) item.at("name").fail("duplicate muscle part name '" + part.name + "'");
+    }
+    part.origin_attach = item.at("origin_attach").asStringList();
+    part.insertion_attach = item.at("insertion_attach").asStringList();
+    for (const std::string& name : part.origin_attach) requireLandmark(item.at("origin_attach"), name);
+    for (const std::string& name : part.insertion_attach) requireLandmark(item.at("insertion_attach"), name);
+    if (part.origin_attach.empty()) item.at("origin_attach").fail("must name at least one landmark");
+    if (part.insertion_attach.empty()) item.at("insertion_attach").fail("must name at least one landmark");
+    part.origin = readFormula(item.at("origin"));
+    part.insertion = readFormula(item.at("insertion"));
+    if (item.has("driver")) {
+      part.has_driver = true;
+      part.driver = readFormula(item.at("driver"));
+    }
+    if (item.has("compression")) part.compression = item.at("compression").asNumber();
+    if (item.has("stretch")) part.stretch = item.at("stretch").asNumber();
+    if (!(part.compression > 0 && part.compression <= 1)) item.at("compression").fail("must be in (0, 1]");
+    if (!(part.stretch >= 1)) item.at("stretch").fail("must be at least 1");
+    if (item.has("bulge")) {
+      JsonReader bulge = item.at("bulge");
+      if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
+      part.bulge[0] = bulge.at(0).asNumber();
+      part.bulge[1] = bulge.at(1).asNumber();
+    }
+    if (item.has("weight_radius_ref_m")) {
+      part.weight_radius_ref_m = item.at("weight_radius_ref_m").asNumber();
+      if (part.weight_radius_ref_m < 0) item.at("weight_radius_ref_m").fail("must not be negative");
+    }
+    preset.parts.push_back(std::move(part));
+  }
+  // Locator references must point backwards so evaluation order is the file order.
+  return preset;
+}
+
+}  // namespace rigbake

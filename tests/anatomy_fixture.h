@@ -1,0 +1,63 @@
+// Loads characters and the shipped presets the way the CLI does, for tests of the anatomy stages.
+#pragma once
+
+#include <string>
+
+#include "anatomy/landmarks.h"
+#include "anatomy/placement.h"
+#include "formats/gltf_document.h"
+#include "formats/preset_json.h"
+#include "test_support.h"
+
+namespace rigbake::test {
+
+inline std::string presetsDir() { return sourceDir() + "/presets"; }
+
+struct Resolved {
+  Character character;
+  LandmarkSet landmarks;
+};
+
+inline Resolved resolveShipped(const std::string& path, const NamingMap* forced = nullptr) {
+  static const std::vector<NamingMap> maps = readNamingMaps(presetsDir() + "/skeletons");
+  static const LandmarkRules rules = readLandmarkRules(presetsDir() + "/landmarks.json");
+  Resolved resolved;
+  resolved.character = loadCharacter(path).character;
+  LandmarkInputs inputs;
+  inputs.maps = &maps;
+  inputs.rules = &rules;
+  inputs.forced_map = forced;
+  resolved.landmarks = resolveLandmarks(resolved.character, inputs);
+  return resolved;
+}
+
+inline const MusclePreset& gowPreset() {
+  static const MusclePreset preset = readMusclePreset(presetsDir() + "/muscles/gow_biped.json");
+  return preset;
+}
+
+}  // namespace rigbake::test
+
+#include <tiny_gltf.h>
+#include <unistd.h>
+
+#include "anatomy/sample_character.h"
+#include "formats/gltf_write.h"
+#include "formats/sample_gltf.h"
+
+namespace rigbake::test {
+
+// The built-in sample character written once per test process to a temporary GLB.
+inline std::string sampleGlbPath(SampleVrm vrm = SampleVrm::kNone) {
+  const char* suffix = vrm == SampleVrm::kNone ? "" : vrm == SampleVrm::kVrm0 ? "-vrm0" : "-vrm1";
+  std::string path = "/tmp/rigbake-test-sample-" + std::to_string(getpid()) + suffix +
+                     (vrm == SampleVrm::kNone ? ".glb" : ".vrm");
+  if (!fileExists(path)) {
+    SampleOptions options;
+    options.vrm = vrm;
+    writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
+  }
+  return path;
+}
+
+}  // namespace rigbake::test
