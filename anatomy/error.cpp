@@ -15,7 +15,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"PRESET_INVALID", ExitCode::kInvalidInput, "A preset or naming map breaks its schema; the message gives the JSON pointer."},
       {"MAP_NOT_FOUND", ExitCode::kInvalidInput, "A naming map named on the command line does not exist among the shipped maps."},
       {"LANDMARK_UNRESOLVED", ExitCode::kInvalidInput, "A landmark the pipeline needs matches no joint and cannot be derived."},
-      {"PRESET_LANDMARK_UNKNOWN", ExitCode::kInvalidInput, "A preset formula names a landmark that is not a canonical landmark."},
+      {"PRESET_LANDMARK_UNKNOWN", ExitCode::kInvalidInput, "A preset or naming map names a landmark that is not canonical."},
       {"MUSCLES_INVALID", ExitCode::kInvalidInput, "A muscle JSON file breaks the muscle schema."},
       {"MUSCLES_MISMATCH", ExitCode::kInvalidInput, "A muscle JSON file names joints that the character does not have."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},

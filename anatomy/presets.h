@@ -42,6 +42,7 @@ struct LandmarkRules {
 // presets/muscles/*.json: one entry per muscle part, left side; the right side is mirrored.
 struct PresetPart {
   std::string group;
+  std::vector<std::string> group_aliases;  // other spellings read from talk-shaped files (TerasMajor)
   std::string name;
   // Attach landmarks, best first: the first that the skeleton resolves is used (the talk attaches
   // the biceps to the twist joints; skeletons without them fall back to the arm joints).

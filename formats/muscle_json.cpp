@@ -108,8 +108,20 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
         if (joint < 0)
           rigbake::fail("MUSCLES_MISMATCH", path + "#" + loc.at("joint").pointer(),
                         "joint '" + joint_name + "' is not in " + set.character + " (is this muscle file for another character? use rigbake retarget)");
-        Eigen::Vector3d local = readVector(loc.at("local"));
-        *locator = locatorOn(skeleton, joint, skeleton.bind_world[joint] * local);
+        MuscleLocator read;
+        read.joint = joint;
+        read.local = readVector(loc.at("local"));
+        read.world = skeleton.bind_world[joint] * read.local;
+        // Keep the talk-shaped world position when it agrees with the local one, so that a file read
+        // and written again is byte-identical; an edit of `local` moves it.
+        std::string talk_key = full + (key == std::string("origin") ? "_muscleOrigin"
+                                       : key == std::string("insertion") ? "_muscleInsertion"
+                                                                          : "_muscleDriver");
+        if (in.has(part.group) && in.at(part.group).has(part.side) && in.at(part.group).at(part.side).has(talk_key)) {
+          Eigen::Vector3d world = readVector(in.at(part.group).at(part.side).at(talk_key));
+          if ((world - read.world).norm() <= 1e-9 * std::max(1.0, landmarks.body.height)) read.world = world;
+        }
+        *locator = read;
       }
       set.parts.push_back(std::move(part));
     }
@@ -131,8 +143,12 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
   for (const char* side_name : {"Left", "Right"}) {
     std::string side = side_name == std::string("Left") ? "l" : "r";
     for (const PresetPart& spec : preset.parts) {
-      if (!in.has(spec.group) || !in.at(spec.group).has(side_name)) continue;
-      JsonReader group = in.at(spec.group).at(side_name);
+      std::string group_key = spec.group;
+      for (const std::string& alias : spec.group_aliases) {
+        if (!in.has(group_key) && in.has(alias)) group_key = alias;
+      }
+      if (!in.has(group_key) || !in.at(group_key).has(side_name)) continue;
+      JsonReader group = in.at(group_key).at(side_name);
       std::string full = side_name + spec.name;
       if (!group.has(full + "_muscleOrigin") && !group.has(full + "_muscleInsertion")) continue;
       auto attach = [&](const std::vector<std::string>& candidates) {

@@ -23,7 +23,8 @@ void requireLandmark(const JsonReader& where, const std::string& name) {
     std::string known;
     for (const std::string& central : centralLandmarks()) known += central + " ";
     for (const std::string& sided : sidedLandmarks()) known += sided + " ";
-    where.fail("'" + name + "' is not a canonical landmark (known: " + known + "; sided names may end in _l or _r)");
+    fail("PRESET_LANDMARK_UNKNOWN", where.file() + "#" + where.pointer(),
+         "'" + name + "' is not a canonical landmark (known: " + known + "; sided names may end in _l or _r)");
   }
 }
 
@@ -174,11 +175,12 @@ MusclePreset readMusclePreset(const std::string& path) {
   if (muscles.arraySize() == 0) muscles.fail("must list at least one muscle part");
   for (size_t i = 0; i < muscles.arraySize(); ++i) {
     JsonReader item = muscles.at(i);
-    item.allowKeys({"group", "name", "why", "origin_attach", "insertion_attach", "origin", "insertion", "driver",
+    item.allowKeys({"group", "group_aliases", "name", "why", "origin_attach", "insertion_attach", "origin", "insertion", "driver",
                     "compression", "stretch", "bulge", "weight_radius_ref_m"});
     PresetPart part;
     part.pointer = item.pointer();
     part.group = item.at("group").asString();
+    if (item.has("group_aliases")) part.group_aliases = item.at("group_aliases").asStringList();
     part.name = item.at("name").asString();
     for (const PresetPart& earlier : preset.parts) {
       if (earlier.name == part.name) item.at("name").fail("duplicate muscle part name '" + part.name + "'");

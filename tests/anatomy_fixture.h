@@ -41,6 +41,8 @@ inline const MusclePreset& gowPreset() {
 #include <tiny_gltf.h>
 #include <unistd.h>
 
+#include <cstdio>
+
 #include "anatomy/sample_character.h"
 #include "formats/gltf_write.h"
 #include "formats/sample_gltf.h"
@@ -49,15 +51,19 @@ namespace rigbake::test {
 
 // The built-in sample character written once per test process to a temporary GLB.
 inline std::string sampleGlbPath(SampleVrm vrm = SampleVrm::kNone) {
-  const char* suffix = vrm == SampleVrm::kNone ? "" : vrm == SampleVrm::kVrm0 ? "-vrm0" : "-vrm1";
-  std::string path = "/tmp/rigbake-test-sample-" + std::to_string(getpid()) + suffix +
-                     (vrm == SampleVrm::kNone ? ".glb" : ".vrm");
-  if (!fileExists(path)) {
-    SampleOptions options;
-    options.vrm = vrm;
-    writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
-  }
-  return path;
+  struct RemovedAtExit {
+    std::string path;
+    explicit RemovedAtExit(SampleVrm variant) {
+      const char* suffix = variant == SampleVrm::kNone ? ".glb" : variant == SampleVrm::kVrm0 ? "-vrm0.vrm" : "-vrm1.vrm";
+      path = "/tmp/rigbake-test-sample-" + std::to_string(getpid()) + suffix;
+      SampleOptions options;
+      options.vrm = variant;
+      writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
+    }
+    ~RemovedAtExit() { std::remove(path.c_str()); }
+  };
+  static const RemovedAtExit plain(SampleVrm::kNone), vrm0(SampleVrm::kVrm0), vrm1(SampleVrm::kVrm1);
+  return vrm == SampleVrm::kNone ? plain.path : vrm == SampleVrm::kVrm0 ? vrm0.path : vrm1.path;
 }
 
 }  // namespace rigbake::test

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# Configures and builds rigbake. Usage: scripts/build.sh [release|debug|asan]  (default: release)
+# Build trees: build/ (release, warnings as errors), build-asan/ (AddressSanitizer + UBSan).
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+kind="${1:-release}"
+case "$kind" in
+  release) dir="$repo/build"; args=(-DCMAKE_BUILD_TYPE=Release) ;;
+  debug) dir="$repo/build-debug"; args=(-DCMAKE_BUILD_TYPE=Debug) ;;
+  asan) dir="$repo/build-asan"; args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGBAKE_SANITIZE=ON) ;;
+  *) echo "usage: scripts/build.sh [release|debug|asan]" >&2; exit 1 ;;
+esac
+cmake -S "$repo" -B "$dir" -G Ninja -DRIGBAKE_WERROR=ON "${args[@]}" >/dev/null
+cmake --build "$dir" --parallel "$(nproc)"
+echo "$dir"

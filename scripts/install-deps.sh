@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# Installs everything rigbake needs on Debian: the packages in scripts/deps-apt.txt and the npm tools
+# (Khronos glTF-Validator) under .tools/. Fast when all of it is already there.
+set -euo pipefail
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+as_root() {
+  if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
+}
+
+mapfile -t packages < <(grep -v -e '^#' -e '^[[:space:]]*$' "$repo/scripts/deps-apt.txt")
+missing=()
+for package in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  echo "rigbake: installing Debian packages: ${missing[*]}" >&2
+  as_root apt-get update -qq
+  as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+bash "$repo/scripts/install-validator.sh"

@@ -1,0 +1,43 @@
+#!/usr/bin/python3
+"""Every shipped preset passes its JSON Schema, and the schemas reject a broken preset.
+
+Usage: check_preset_schemas.py REPO_DIR. Uses Debian's python3-jsonschema (Draft 2020-12)."""
+import copy
+import json
+import pathlib
+import sys
+
+import jsonschema
+
+def main(repo: pathlib.Path) -> int:
+    schemas_dir = repo / "presets" / "schemas"
+    schemas = {p.name: json.loads(p.read_text()) for p in schemas_dir.glob("*.schema.json")}
+    def validator(name):
+        # Debian 12 ships jsonschema 4.10: references resolve through a RefResolver store keyed by $id.
+        resolver = jsonschema.RefResolver(base_uri=name, referrer=schemas[name], store=schemas)
+        return jsonschema.Draft202012Validator(schemas[name], resolver=resolver)
+    checks = [("naming_map.schema.json", p) for p in sorted((repo / "presets" / "skeletons").glob("*.json"))]
+    checks += [("landmark_rules.schema.json", repo / "presets" / "landmarks.json")]
+    checks += [("muscle_preset.schema.json", p) for p in sorted((repo / "presets" / "muscles").glob("*.json"))]
+    failures = 0
+    for schema, path in checks:
+        errors = list(validator(schema).iter_errors(json.loads(path.read_text())))
+        for error in errors:
+            print(f"{path.relative_to(repo)}#/{'/'.join(map(str, error.absolute_path))}: {error.message}")
+        failures += bool(errors)
+        print(f"{'FAIL' if errors else 'ok  '} {path.relative_to(repo)} against {schema}")
+    # The schemas must be able to fail: a typo'd key and an unknown landmark are both rejected.
+    preset = json.loads((repo / "presets" / "muscles" / "gow_biped.json").read_text())
+    broken_key = copy.deepcopy(preset)
+    broken_key["muscles"][0]["compresion"] = 0.5
+    broken_landmark = copy.deepcopy(preset)
+    broken_landmark["muscles"][0]["origin_attach"] = "shoulderblade"
+    for label, document in [("typo'd key", broken_key), ("unknown landmark", broken_landmark)]:
+        rejected = not validator("muscle_preset.schema.json").is_valid(document)
+        print(f"{'ok  ' if rejected else 'FAIL'} schema rejects a {label}")
+        failures += not rejected
+    print(f"{len(checks) + 2 - failures} passed, {failures} failed")
+    return 1 if failures else 0
+
+if __name__ == "__main__":
+    sys.exit(main(pathlib.Path(sys.argv[1])))

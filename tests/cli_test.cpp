@@ -1,0 +1,213 @@
+// The command line as users meet it: clear one-line errors with stable codes and exit statuses, no
+// output left behind by a failed run, deterministic outputs, and the documented --json contract.
+#include <nlohmann/json.hpp>
+
+#include "cli_support.h"
+
+using namespace rigbake::test;
+
+namespace {
+
+// A minimal glTF with one triangle and, when `joints` > 0, a skin of that many chained joints.
+std::string tinyGltf(int joints) {
+  nlohmann::json gltf = {{"asset", {{"version", "2.0"}}}, {"scene", 0}};
+  std::string bytes;
+  auto append_floats = [&](std::initializer_list<float> values) {
+    for (float v : values) bytes.append(reinterpret_cast<const char*>(&v), 4);
+  };
+  append_floats({0, 0, 0, 1, 0, 0, 0, 1, 0});
+  nlohmann::json nodes = nlohmann::json::array();
+  nodes.push_back({{"mesh", 0}});
+  nlohmann::json accessors = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"},
+                               {"min", {0, 0, 0}}, {"max", {1, 1, 0}}}};
+  nlohmann::json views = {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}}};
+  nlohmann::json primitive = {{"attributes", {{"POSITION", 0}}}};
+  if (joints > 0) {
+    nodes[0]["skin"] = 0;
+    nlohmann::json skin_joints = nlohmann::json::array();
+    for (int j = 0; j < joints; ++j) {
+      nlohmann::json node = {{"name", "bone" + std::to_string(j)}, {"translation", {0, j == 0 ? 0.0 : 0.5, 0}}};
+      if (j + 1 < joints) node["children"] = {j + 2};
+      nodes.push_back(node);
+      skin_joints.push_back(j + 1);
+    }
+    gltf["skins"] = {{{"joints", skin_joints}}};
+    for (int v = 0; v < 3; ++v) {
+      for (uint16_t k : {uint16_t(0), uint16_t(0), uint16_t(0), uint16_t(0)}) bytes.append(reinterpret_cast<const char*>(&k), 2);
+    }
+    append_floats({1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0});
+    views.push_back({{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 24}});
+    views.push_back({{"buffer", 0}, {"byteOffset", 60}, {"byteLength", 48}});
+    accessors.push_back({{"bufferView", 1}, {"componentType", 5123}, {"count", 3}, {"type", "VEC4"}});
+    accessors.push_back({{"bufferView", 2}, {"componentType", 5126}, {"count", 3}, {"type", "VEC4"}});
+    primitive["attributes"]["JOINTS_0"] = 1;
+    primitive["attributes"]["WEIGHTS_0"] = 2;
+  }
+  std::string base64;
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  for (size_t i = 0; i < bytes.size(); i += 3) {
+    uint32_t chunk = static_cast<uint8_t>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) chunk |= static_cast<uint8_t>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) chunk |= static_cast<uint8_t>(bytes[i + 2]);
+    base64 += kAlphabet[(chunk >> 18) & 63];
+    base64 += kAlphabet[(chunk >> 12) & 63];
+    base64 += i + 1 < bytes.size() ? kAlphabet[(chunk >> 6) & 63] : '=';
+    base64 += i + 2 < bytes.size() ? kAlphabet[chunk & 63] : '=';
+  }
+  gltf["nodes"] = nodes;
+  gltf["scenes"] = {{{"nodes", {0, 1}}}};
+  if (joints == 0) gltf["scenes"] = {{{"nodes", {0}}}};
+  gltf["meshes"] = {{{"primitives", {primitive}}}};
+  gltf["accessors"] = accessors;
+  gltf["bufferViews"] = views;
+  gltf["buffers"] = {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64}}};
+  return gltf.dump();
+}
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+// Every failure: one line on stderr starting with the code, the given exit status, no output file.
+void expectFailure(const CliResult& result, const std::string& code, int exit_code, const std::string& output) {
+  INFO("stderr: " << result.err);
+  CHECK(result.exit_code == exit_code);
+  CHECK(result.err.rfind(code + " ", 0) == 0);
+  CHECK(lineCount(result.err) == 1);
+  CHECK_FALSE(fileExists(output));
+  // Nor a temporary file beside it.
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(output).parent_path()))
+    CHECK(entry.path().filename().string().find("rigbake-tmp") == std::string::npos);
+}
+
+}  // namespace
+
+TEST_CASE("cli: bad inputs give one clear line, a stable code, an exit status and no output") {
+  TempDir dir;
+  const std::string out = dir / "muscles.json";
+
+  SECTION("missing file") {
+    CliResult r = runCli("place " + (dir / "nope.glb") + " -o " + out);
+    expectFailure(r, "IO_FILE_NOT_FOUND", 2, out);
+    CHECK(r.err.find("nope.glb") != std::string::npos);
+  }
+  SECTION("not a glTF") {
+    writeText(dir / "notes.glb", "these are not the bytes you are looking for");
+    expectFailure(runCli("place " + (dir / "notes.glb") + " -o " + out), "GLTF_PARSE_FAILED", 3, out);
+  }
+  SECTION("truncated GLB") {
+    std::string glb = slurp(sampleGlbPathForCli());
+    writeText(dir / "cut.glb", glb.substr(0, glb.size() / 2));
+    CliResult r = runCli("place " + (dir / "cut.glb") + " -o " + out);
+    expectFailure(r, "GLTF_PARSE_FAILED", 3, out);
+    CHECK(r.err.find("cut.glb") != std::string::npos);
+  }
+  SECTION("glTF without a skin") {
+    writeText(dir / "static.gltf", tinyGltf(0));
+    expectFailure(runCli("place " + (dir / "static.gltf") + " -o " + out), "GLTF_NO_SKIN", 3, out);
+  }
+  SECTION("skeleton without the needed joints names the landmark and the names tried") {
+    writeText(dir / "stick.gltf", tinyGltf(3));
+    CliResult r = runCli("place " + (dir / "stick.gltf") + " -o " + out);
+    expectFailure(r, "LANDMARK_UNRESOLVED", 3, out);
+    CHECK(r.err.find("landmark '") != std::string::npos);
+    CHECK(r.err.find("tried") != std::string::npos);
+  }
+  SECTION("malformed preset names the JSON pointer") {
+    std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");
+    size_t at = preset.find("\"compression\": 0.5", preset.find("\"name\": \"LatissimusDorsi\""));
+    REQUIRE(at != std::string::npos);
+    preset.replace(at, std::string("\"compression\": 0.5").size(), "\"compresion\": 0.5");
+    writeText(dir / "typo.json", preset);
+    CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "typo.json") + " -o " + out);
+    expectFailure(r, "PRESET_INVALID", 3, out);
+    CHECK(r.err.find("typo.json#/muscles/3/compresion") != std::string::npos);
+  }
+  SECTION("preset that is not JSON") {
+    writeText(dir / "broken.json", "{\"muscles\": [");
+    CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "broken.json") + " -o " + out);
+    expectFailure(r, "JSON_PARSE_FAILED", 3, out);
+  }
+  SECTION("unknown naming map") {
+    CliResult r = runCli("landmarks " + sampleGlbPathForCli() + " --map nosuchmap");
+    CHECK(r.exit_code == 3);
+    CHECK(r.err.rfind("MAP_NOT_FOUND ", 0) == 0);
+  }
+  SECTION("usage errors") {
+    CliResult r = runCli("place " + sampleGlbPathForCli() + " -o " + out + " --side middle");
+    CHECK(r.exit_code == 1);
+    CHECK(lineCount(r.err) == 1);
+    CHECK_FALSE(fileExists(out));
+  }
+}
+
+TEST_CASE("cli: place writes byte-identical JSON on every run") {
+  TempDir dir;
+  for (const std::string& path : {sampleGlbPathForCli(), requireAsset("CesiumMan.glb")}) {
+    if (path.empty()) continue;
+    CliResult a = runCli("place " + path + " -o " + (dir / "a.json"));
+    CliResult b = runCli("place " + path + " -o " + (dir / "b.json"));
+    REQUIRE(a.exit_code == 0);
+    REQUIRE(b.exit_code == 0);
+    CHECK(slurp(dir / "a.json") == slurp(dir / "b.json"));
+    CHECK(slurp(dir / "a.json").size() > 10000);
+  }
+}
+
+TEST_CASE("cli: landmarks --json follows the documented contract") {
+  CliResult r = runCli("landmarks --json " + sampleGlbPathForCli());
+  REQUIRE(r.exit_code == 0);
+  nlohmann::json j = nlohmann::json::parse(r.out);
+  CHECK(j["units"] == "m");
+  CHECK(j["character"].get<std::string>().find(".glb") != std::string::npos);
+  CHECK(j["body"]["height"].get<double>() == Approx(1.8).margin(1e-9));
+  CHECK(j["body"]["up"].size() == 3);
+  for (const char* name : {"head", "neck", "chest", "spine_t12", "spine_l5", "pelvis"}) {
+    INFO(name);
+    REQUIRE(j["landmarks"].contains(name));
+    CHECK(j["landmarks"][name]["position"].size() == 3);
+  }
+  for (const char* base : {"clavicle", "acromion", "scapula", "upper_arm", "upper_arm_twist", "forearm",
+                           "forearm_twist", "hand"}) {
+    for (const char* side : {"_l", "_r"}) {
+      std::string name = std::string(base) + side;
+      INFO(name);
+      REQUIRE(j["landmarks"].contains(name));
+      CHECK(j["landmarks"][name]["joint"].is_string());
+      CHECK(j["landmarks"][name]["derived"].is_null());
+    }
+  }
+  std::string cesium = requireAsset("CesiumMan.glb");
+  if (!cesium.empty()) {
+    nlohmann::json c = nlohmann::json::parse(runCli("landmarks --json " + cesium).out);
+    CHECK(c["landmarks"]["acromion_l"]["joint"].is_null());
+    CHECK(c["landmarks"]["acromion_l"]["derived"].get<std::string>().find("lerp(clavicle_l") != std::string::npos);
+    CHECK(c["landmarks"]["upper_arm_l"]["source"] == "structure");
+    CHECK(c["landmarks"]["upper_arm_twist_l"].is_null());
+  }
+}
+
+TEST_CASE("cli: errors lists every code with its exit status") {
+  CliResult r = runCli("errors");
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.out.find("LANDMARK_UNRESOLVED\t3") != std::string::npos);
+  CHECK(r.out.find("IO_FILE_NOT_FOUND\t2") != std::string::npos);
+  std::string doc = slurp(sourceDir() + "/docs/errors.md");
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    std::string code = line.substr(0, line.find('\t'));
+    INFO(code);
+    CHECK(doc.find("`" + code + "`") != std::string::npos);
+  }
+}
+
+TEST_CASE("cli: a preset naming an unknown landmark says which and where") {
+  TempDir dir;
+  std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");
+  size_t at = preset.find("\"origin_attach\": \"scapula\"");
+  REQUIRE(at != std::string::npos);
+  preset.replace(at, std::string("\"origin_attach\": \"scapula\"").size(), "\"origin_attach\": \"shoulderblade\"");
+  writeText(dir / "unknown.json", preset);
+  CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "unknown.json") + " -o " + (dir / "m.json"));
+  expectFailure(r, "PRESET_LANDMARK_UNKNOWN", 3, dir / "m.json");
+  CHECK(r.err.find("unknown.json#/muscles/4/origin_attach") != std::string::npos);
+  CHECK(r.err.find("shoulderblade") != std::string::npos);
+}
