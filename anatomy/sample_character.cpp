@@ -669,6 +669,20 @@ SampleCharacter makeSampleCharacter(const SampleOptions& options) {
     world[j] = turned ? turn(skeleton.world[j]) : skeleton.world[j];
     if (!turned && j == neck) world_rotation[j] = half_turn;
   }
+  // glTF stores node translations as JSON numbers but inverse bind matrices as floats. Rounding the
+  // local translations to float keeps the root's node transform and its inverse bind matrix exact
+  // inverses, so a loader that maps bind space to the scene through them (world(root) * IBM(root))
+  // gets exactly the identity and the feet stay exactly on y = 0. Rounding is symmetric in sign, so
+  // the mirror symmetry survives it.
+  // Through a volatile float: GCC 12's vectorizer at -O2 folds the double -> float -> double round
+  // trip of a vector's components back into the original doubles.
+  auto toFloatPrecision = [](const Eigen::Vector3d& v) {
+    auto round = [](double x) {
+      volatile float narrowed = static_cast<float>(x);
+      return static_cast<double>(narrowed);
+    };
+    return Eigen::Vector3d(round(v.x()), round(v.y()), round(v.z()));
+  };
   for (int j = 0; j < joint_count; ++j) {
     SampleJoint joint;
     joint.name = skeleton.names[j];
@@ -679,11 +693,11 @@ SampleCharacter makeSampleCharacter(const SampleOptions& options) {
     }
     joint.parent = skeleton.parents[j];
     if (joint.parent < 0) {
-      joint.local.translation = world[j];
+      joint.local.translation = toFloatPrecision(world[j]);
       joint.local.rotation = world_rotation[j];
     } else {
       Eigen::Quaterniond parent_inverse = world_rotation[joint.parent].conjugate();
-      joint.local.translation = parent_inverse * (world[j] - world[joint.parent]);
+      joint.local.translation = toFloatPrecision(parent_inverse * (world[j] - world[joint.parent]));
       joint.local.rotation = parent_inverse * world_rotation[j];
     }
     character.joints.push_back(joint);

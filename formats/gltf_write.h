@@ -1,0 +1,28 @@
+// Writes a tinygltf model as .glb/.vrm (binary) or .gltf (JSON with the buffer embedded as base64),
+// byte-deterministically and atomically. Works on models built by rigbake and on models the loader
+// read (formats/gltf_read keeps images as their encoded bytes): all buffers are merged into one, and
+// images given by an external file or a data: URI are moved into buffer views, so the output stands
+// alone wherever it is written.
+#pragma once
+
+#include <string>
+
+namespace tinygltf {
+class Model;
+}
+
+namespace rigbake {
+
+// The bytes of the file. `binary` selects GLB. Throws Error GLTF_PARSE_FAILED (with a JSON pointer)
+// when a buffer view lies outside its buffer, and INTERNAL when an image holds decoded pixels instead
+// of its encoded file bytes.
+std::string serializeGltf(const tinygltf::Model& model, bool binary);
+
+// Binary when `path` ends in .glb or .vrm (any case), JSON otherwise. Throws IO_WRITE_FAILED; a
+// failed write leaves no file behind.
+void writeGltf(const tinygltf::Model& model, const std::string& path);
+
+// True for paths that writeGltf writes as GLB.
+bool isBinaryGltfPath(const std::string& path);
+
+}  // namespace rigbake

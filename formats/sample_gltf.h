@@ -1,0 +1,16 @@
+// The procedural mannequin as a glTF model: one node per joint (node index = joint index), a "Body"
+// node with the skinned mesh, one skin, one animation per clip, and for the VRM variants the VRM 0.x
+// ("VRM") or VRM 1.0 ("VRMC_vrm") extension that maps humanoid bones to nodes.
+#pragma once
+
+#include "anatomy/sample_character.h"
+
+namespace tinygltf {
+class Model;
+}
+
+namespace rigbake {
+
+tinygltf::Model sampleToGltf(const SampleCharacter& character);
+
+}  // namespace rigbake
