@@ -48,6 +48,9 @@ struct MeshPart {
   int gltf_primitive = -1;
   int gltf_node = -1;
   bool skinned = false;
+  int gltf_skin = -1;
+  // The skin's joint list as skeleton indices: JOINTS_n values index this list in the file.
+  std::vector<int> skin_joints;
   // A rigid part rides this joint (the nearest joint above its node), -1 when none.
   int rigid_joint = -1;
   std::vector<Eigen::Vector3d> positions;
@@ -83,6 +86,8 @@ struct Character {
   Skeleton skeleton;
   std::vector<MeshPart> meshes;
   std::vector<Clip> clips;
+  // Per glTF skin, the transform from its bind space to the scene (see formats/gltf_read.cpp).
+  std::vector<Eigen::Affine3d> skin_placement;
   // VRM humanoid bone name (e.g. "leftUpperArm") -> skeleton joint index, when the file is a VRM.
   std::map<std::string, int> vrm_humanoid;
   std::string vrm_version;  // "0.x", "1.0" or empty

@@ -13,6 +13,7 @@ using Runner = std::function<int()>;
 void addSampleCommand(CLI::App& app, Runner* runner);
 void addLandmarksCommand(CLI::App& app, Runner* runner);
 void addPlaceCommand(CLI::App& app, Runner* runner);
+void addBakeCommand(CLI::App& app, Runner* runner);
 void addErrorsCommand(CLI::App& app, Runner* runner);
 
 }  // namespace rigbake::cli

@@ -12,7 +12,8 @@ int main(int argc, char** argv) {
       "Typical run:\n"
       "  rigbake sample -o mannequin.glb\n"
       "  rigbake landmarks mannequin.glb\n"
-      "  rigbake place mannequin.glb -o muscles.json\n",
+      "  rigbake place mannequin.glb -o muscles.json\n"
+      "  rigbake bake mannequin.glb --muscles muscles.json --influences 10 -o baked.glb --stats stats.json\n",
       "rigbake"};
   app.set_version_flag("--version", RIGBAKE_VERSION);
   app.require_subcommand(1);
@@ -20,6 +21,7 @@ int main(int argc, char** argv) {
   rigbake::cli::addSampleCommand(app, &runner);
   rigbake::cli::addLandmarksCommand(app, &runner);
   rigbake::cli::addPlaceCommand(app, &runner);
+  rigbake::cli::addBakeCommand(app, &runner);
   rigbake::cli::addErrorsCommand(app, &runner);
   try {
     app.parse(argc, argv);

@@ -263,6 +263,10 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
       part.gltf_primitive = static_cast<int>(p);
       part.gltf_node = node_index;
       part.skinned = skin != nullptr;
+      if (skin) {
+        part.gltf_skin = node.skin;
+        for (int joint_node : skin->joints) part.skin_joints.push_back(joint_of_node[joint_node]);
+      }
       part.rigid_joint = rigid_joint;
       AccessorData positions = readAccessor(model, position_it->second, where);
       if (positions.components != 3) fail("GLTF_ACCESSOR_INVALID", where, "POSITION must be VEC3");
@@ -423,6 +427,7 @@ LoadedCharacter loadCharacter(const std::string& path) {
   character.source = path;
   character.skeleton = buildSkeleton(model, tree, path, &joint_of_node, &skin_placement);
   readMeshes(model, tree, character.skeleton, joint_of_node, skin_placement, path, &character);
+  character.skin_placement = skin_placement;
   readClips(model, joint_of_node, path, &character);
   readVrmHumanoid(model, joint_of_node, &character);
   loaded.document = std::move(document);

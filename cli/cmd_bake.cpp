@@ -1,0 +1,137 @@
+// `rigbake bake CHAR --muscles muscles.json -o baked.glb`: muscle joints, their animation and skin
+// weights into a new glTF, with the deformation error and memory figures of the chosen influence count.
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "anatomy/placement.h"
+#include "cli/commands.h"
+#include "cli/common.h"
+#include "formats/atomic_file.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_write.h"
+#include "formats/muscle_json.h"
+#include "formats/packed_file.h"
+#include "pipeline/bake.h"
+#include "pipeline/memory_table.h"
+
+namespace rigbake::cli {
+namespace {
+
+struct BakeCommandOptions {
+  std::string character;
+  std::string muscles;
+  std::string preset = "gow_biped";
+  std::string output;
+  std::string packed_output;
+  std::string stats_output;
+  int influences = 4;
+  double fps = 0.0;
+  bool json = false;
+  PresetOptions presets;
+};
+
+nlohmann::json errorJson(const DeformationError& error) {
+  return {{"max", error.max_displacement * 1000.0}, {"rms", error.rms_displacement * 1000.0}};
+}
+
+nlohmann::json statsJson(const BakeCommandOptions& options, const MuscleSet& muscles, const BakeResult& bake) {
+  nlohmann::json per_clip = nlohmann::json::object();
+  for (const BakedClip& clip : bake.clips) per_clip[clip.name] = errorJson(clip.error);
+  nlohmann::json error = errorJson(bake.error);
+  error["per_clip"] = per_clip;
+
+  int gltf_bytes = 0, packed_bytes = 0;
+  if (!bake.parts.empty()) {
+    const BakedPart& first = bake.parts.front();
+    for (const VertexAttributeData& a : first.standard) gltf_bytes += static_cast<int>(a.bytes.size() / a.accessor.count);
+    packed_bytes = packedSkinBytesPerVertex(bake.influences, first.packed.index_bytes);
+  }
+  nlohmann::json table = nlohmann::json::array();
+  for (const SkinLayoutSize& layout : skinMemoryTable(bake.vertex_count)) {
+    table.push_back({{"layout", layout.id},
+                     {"influences", layout.influences},
+                     {"bytes_per_vertex", layout.bytes_per_vertex},
+                     {"total_bytes", layout.total_bytes}});
+  }
+  return {
+      {"character", fileNameOf(options.character)},
+      {"output", fileNameOf(options.output)},
+      {"units", "m"},
+      {"influences", bake.influences},
+      {"muscle_joints", muscles.parts.size()},
+      {"joints_added", bake.joints.size()},
+      {"vertices", bake.vertex_count},
+      {"clips", bake.clips.size()},
+      {"deformation_error_mm", error},
+      {"bytes_per_vertex", {{"gltf", gltf_bytes}, {"packed", packed_bytes}}},
+      {"bytes_total", {{"gltf", static_cast<long long>(gltf_bytes) * bake.vertex_count},
+                       {"packed", static_cast<long long>(packed_bytes) * bake.vertex_count}}},
+      {"memory_table", table},
+  };
+}
+
+int run(const BakeCommandOptions& options) {
+  MusclePreset preset = loadMusclePreset(options.presets, options.preset);
+  ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
+  const Character& character = resolved.loaded.character;
+  MuscleSet muscles = options.muscles.empty()
+                          ? placeMuscles(character, resolved.landmarks, preset, Sides::kBoth)
+                          : readMuscleJson(options.muscles, character, resolved.landmarks, preset);
+  BakeOptions bake_options;
+  bake_options.influences = options.influences;
+  bake_options.fps = options.fps;
+  BakeResult bake = bakeCharacter(character, muscles, bake_options);
+  nlohmann::json stats = statsJson(options, muscles, bake);
+
+  // Everything is computed before anything is written, so a failure leaves no output behind.
+  std::string model_bytes = serializeGltf(bakedModel(*resolved.loaded.document, character, muscles, bake),
+                                          isBinaryGltfPath(options.output));
+  std::vector<PackedInfluences> packed;
+  for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
+  writeFileAtomically(options.output, model_bytes);
+  if (!options.packed_output.empty()) writePackedFile(options.packed_output, packed);
+  if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, stats.dump(2) + "\n");
+
+  if (options.json) std::cout << stats.dump(2) << "\n";
+  std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
+            << bake.joints.size() << " joints) into " << options.output << ": " << bake.influences
+            << " influences/vertex, " << bake.vertex_count << " vertices, " << bake.clips.size()
+            << " clips; deformation error max " << stats["deformation_error_mm"]["max"].get<double>() << " mm, rms "
+            << stats["deformation_error_mm"]["rms"].get<double>() << " mm; skin data "
+            << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
+            << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
+  return 0;
+}
+
+}  // namespace
+
+void addBakeCommand(CLI::App& app, Runner* runner) {
+  auto options = std::make_shared<BakeCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "bake",
+      "Bake muscle joints into a character: per muscle a base, tip, driver and skinned joint (the skinned one "
+      "volume-preserving, docs/muscle-model.md) added to the skeleton and every skin, animated over every clip, "
+      "with skin weights pruned to 4, 7 or 10 influences per vertex at 0.001 precision, written as JOINTS_n/WEIGHTS_n "
+      "and as packed buffers (docs/packed-influences.md). Reports the deformation error of the pruning in mm.");
+  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
+  command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
+  command->add_option("--muscles", options->muscles,
+                      "Muscle JSON from `rigbake place` (default: place --preset on the character now)");
+  command->add_option("--preset", options->preset, "Muscle preset used when --muscles is absent or positions-only")
+      ->capture_default_str();
+  command->add_option("--influences", options->influences, "Influences per vertex: 4, 7 or 10")
+      ->check(CLI::IsMember({4, 7, 10}))
+      ->capture_default_str();
+  command->add_option("--fps", options->fps, "Sample clips at this rate (frames per second); 0 = at their own keys")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
+  command->add_option("--stats", options->stats_output, "Write figures (deformation error, bytes per vertex) as JSON");
+  addPresetOptions(command, &options->presets);
+  command->add_flag("--json", options->json, "Print the figures as JSON on stdout");
+  command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
+}
+
+}  // namespace rigbake::cli

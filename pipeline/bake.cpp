@@ -1,0 +1,191 @@
+#include "pipeline/bake.h"
+
+#include <cassert>
+
+#include "anatomy/error.h"
+#include "formats/surface_graph.h"
+#include "pipeline/muscle_joint.h"
+#include "pipeline/pose.h"
+#include "pipeline/quantize_for_motion.h"
+
+namespace rigbake {
+
+std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
+  switch (role) {
+    case MuscleJointRole::kBase: return part.fullName() + "_muscleBase";
+    case MuscleJointRole::kTip: return part.fullName() + "_muscleTip";
+    case MuscleJointRole::kDriver: return part.fullName() + "_muscleDriver";
+    case MuscleJointRole::kSkinned: return part.fullName() + "_muscleSkinned";
+  }
+  return part.fullName();
+}
+
+namespace {
+
+constexpr MuscleJointRole kRoles[] = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
+                                      MuscleJointRole::kSkinned};
+
+int parentOf(const MusclePart& part, MuscleJointRole role) {
+  return role == MuscleJointRole::kTip ? part.insertion.joint : muscleParentJoint(part);
+}
+
+// World transform of one of a muscle's joints in an evaluated state. The base and tip keep unit
+// scale; the driver carries the bulge but not the skinned joint's scale.
+Eigen::Affine3d roleWorld(const MuscleJointState& state, MuscleJointRole role) {
+  switch (role) {
+    case MuscleJointRole::kBase: return state.base;
+    case MuscleJointRole::kTip: return state.tip;
+    case MuscleJointRole::kDriver: {
+      Eigen::Affine3d driver = state.base;
+      driver.translation() = state.driver + state.bulge_offset;
+      return driver;
+    }
+    case MuscleJointRole::kSkinned: return state.skinned;
+  }
+  return state.skinned;
+}
+
+Trs localTrs(const Eigen::Affine3d& world, const Pose& pose, int parent) {
+  return decomposeTrs(pose.world[parent].inverse() * world);
+}
+
+InfluenceSet normalized(const InfluenceSet& set) {
+  InfluenceSet out = set;
+  for (int v = 0; v < set.vertexCount(); ++v) {
+    double sum = 0.0;
+    for (int k = 0; k < set.slots_per_vertex; ++k) sum += set.weights[v * set.slots_per_vertex + k];
+    for (int k = 0; k < set.slots_per_vertex; ++k) out.weights[v * set.slots_per_vertex + k] /= sum;
+  }
+  return out;
+}
+
+}  // namespace
+
+BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options) {
+  const Skeleton& skeleton = character.skeleton;
+  if (!isPackedInfluenceCount(options.influences))
+    fail("USAGE", "--influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
+  if (options.fps < 0) fail("USAGE", "--fps", "must be positive, or 0 for the clips' own key times");
+  for (const MusclePart& part : muscles.parts) {
+    std::string problem = musclePartProblem(part, skeleton);
+    if (!problem.empty()) fail("MUSCLES_MISMATCH", muscles.character, part.fullName() + ": " + problem);
+  }
+  BakeResult result;
+  result.influences = options.influences;
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+  const double body_height = muscles.body_height;
+
+  // Joints: bind and rest transforms.
+  const Pose rest = restPose(skeleton);
+  for (int m = 0; m < muscle_count; ++m) {
+    const MusclePart& part = muscles.parts[m];
+    const MuscleJointState at_bind = evaluateMuscle(part, skeleton, bindPose(skeleton));
+    const MuscleJointState at_rest = evaluateMuscle(part, skeleton, rest);
+    for (MuscleJointRole role : kRoles) {
+      BakedJoint joint;
+      joint.name = muscleJointName(part, role);
+      joint.muscle = m;
+      joint.role = role;
+      joint.parent = parentOf(part, role);
+      joint.bind_world = role == MuscleJointRole::kSkinned ? muscleBindTransform(part, skeleton) : roleWorld(at_bind, role);
+      joint.rest_local = localTrs(roleWorld(at_rest, role), rest, joint.parent);
+      if (role == MuscleJointRole::kSkinned) result.skinned_joint_of_muscle.push_back(static_cast<int>(result.joints.size()));
+      result.joints.push_back(joint);
+    }
+  }
+  // A muscle's skinned joint is skeleton joint (size + m) in the influences below.
+  std::vector<int> muscle_joints(muscle_count);
+  for (int m = 0; m < muscle_count; ++m) muscle_joints[m] = skeleton.size() + m;
+
+  // Clips: every baked joint's local TRS, every muscle's length ratio, and the skin matrices of every
+  // sampled frame (for the rounding of the weights and for the deformation error).
+  std::vector<std::vector<SkinFrame>> clip_frames;
+  for (const Clip& clip : character.clips) {
+    BakedClip baked;
+    baked.gltf_animation = clip.gltf_animation;
+    baked.name = clip.name;
+    baked.times = sampleTimes(clip, options.fps);
+    std::vector<SkinFrame> frames;
+    for (double time : baked.times) {
+      const Pose pose = sampleClip(skeleton, clip, time);
+      std::vector<Trs> locals;
+      std::vector<double> ratios;
+      SkinFrame skin(skeleton.size() + muscle_count);
+      for (int j = 0; j < skeleton.size(); ++j) skin[j] = skinMatrix(pose, skeleton, j);
+      for (int m = 0; m < muscle_count; ++m) {
+        const MusclePart& part = muscles.parts[m];
+        const MuscleJointState state = evaluateMuscle(part, skeleton, pose);
+        for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(state, role), pose, parentOf(part, role)));
+        ratios.push_back(state.ratio);
+        skin[skeleton.size() + m] = state.skinned * result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
+      }
+      baked.local.push_back(std::move(locals));
+      baked.ratio.push_back(std::move(ratios));
+      frames.push_back(std::move(skin));
+    }
+    clip_frames.push_back(std::move(frames));
+    result.clips.push_back(std::move(baked));
+  }
+  std::vector<SkinFrame> all_frames;
+  for (const auto& frames : clip_frames) all_frames.insert(all_frames.end(), frames.begin(), frames.end());
+
+  // Weights per skinned part.
+  const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height);
+  std::vector<std::pair<int, InfluenceSet>> approximations;  // mesh part -> dequantized, skeleton indices
+  for (size_t p = 0; p < character.meshes.size(); ++p) {
+    const MeshPart& mesh = character.meshes[p];
+    if (!mesh.skinned || mesh.positions.empty()) continue;
+    BakedPart baked;
+    baked.mesh_part = static_cast<int>(p);
+    InfluenceSet base = influencesFromMesh(mesh);
+    if (!checkInfluences(base, skeleton.size()).empty())
+      fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
+    SurfaceGraph surface = buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3));
+    baked.full = normalized(addMuscleInfluences(mesh, base, surface, skeleton, muscles, muscle_joints, radii, options.weights));
+    QuantizedInfluences quantized =
+        quantizeForMotion(pruneInfluences(baked.full, options.influences), mesh.positions, all_frames);
+    approximations.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
+
+    // Skin-local indices: the file's joint list, then the muscles' skinned joints.
+    baked.skin_joints = mesh.skin_joints;
+    baked.skin_joints.insert(baked.skin_joints.end(), muscle_joints.begin(), muscle_joints.end());
+    std::vector<int> local_of(skeleton.size() + muscle_count, -1);
+    for (size_t k = 0; k < baked.skin_joints.size(); ++k) {
+      if (local_of[baked.skin_joints[k]] < 0) local_of[baked.skin_joints[k]] = static_cast<int>(k);
+    }
+    baked.quantized = quantized;
+    for (size_t k = 0; k < quantized.joints.size(); ++k) {
+      if (quantized.weights[k] == 0) {
+        baked.quantized.joints[k] = 0;
+        continue;
+      }
+      int local = local_of[quantized.joints[k]];
+      if (local < 0)
+        fail("GLTF_SKIN_INVALID", character.source, "mesh '" + mesh.name + "' is weighted to a joint outside its skin");
+      baked.quantized.joints[k] = local;
+    }
+    const int skin_size = static_cast<int>(baked.skin_joints.size());
+    baked.standard = standardSkinAttributes(baked.quantized, skin_size, WeightStorage::kUnsignedShort);
+    baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
+    baked.packed_attributes = packedGltfAttributes(baked.packed);
+    result.vertex_count += baked.quantized.vertexCount();
+    result.parts.push_back(std::move(baked));
+  }
+
+  // Deformation error of the pruned, quantized weights against the full-precision ones.
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    BakedClip& baked = result.clips[c];
+    for (const SkinFrame& skin : clip_frames[c]) {
+      for (size_t a = 0; a < approximations.size(); ++a) {
+        const MeshPart& mesh = character.meshes[approximations[a].first];
+        DeformationError frame =
+            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, skin);
+        baked.error = combineDeformationErrors(baked.error, frame);
+      }
+    }
+    result.error = combineDeformationErrors(result.error, baked.error);
+  }
+  return result;
+}
+
+}  // namespace rigbake

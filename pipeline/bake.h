@@ -1,0 +1,77 @@
+// The bake: turns placed muscles into joints, animation and skin weights for a character, as plain
+// data that formats/gltf_bake.cpp writes into the glTF. Following the talk's "Muscle Joint Group":
+// per muscle a base joint (at the origin, aimed at the insertion), a tip joint (at the insertion,
+// aimed at the origin), a driver between them and one skinned joint on the driver with a
+// volume-preserving scale (docs/muscle-model.md). Influences are pruned to 4, 7 or 10 per vertex and
+// quantized to 0.001 ("Increase Bone Influences per Vertex"; docs/packed-influences.md).
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "anatomy/character.h"
+#include "anatomy/muscle_set.h"
+#include "pipeline/deformation_error.h"
+#include "pipeline/influences.h"
+#include "pipeline/muscle_weights.h"
+#include "pipeline/pack_influences.h"
+
+namespace rigbake {
+
+struct BakeOptions {
+  int influences = 4;  // 4, 7 or 10
+  double fps = 0.0;    // 0: sample each clip at its own key times
+  MuscleWeightOptions weights;
+};
+
+// The four joints of one muscle group. Each is a new node: the skinned joint is also added to every
+// skin; base, driver and skinned ride on the origin attach joint, the tip on the insertion joint.
+enum class MuscleJointRole { kBase, kTip, kDriver, kSkinned };
+
+struct BakedJoint {
+  std::string name;        // e.g. LeftBicep_muscleSkinned
+  int muscle = -1;         // index into MuscleSet::parts
+  MuscleJointRole role = MuscleJointRole::kSkinned;
+  int parent = -1;         // skeleton joint the node is a child of
+  Trs rest_local;          // node TRS at the skeleton's rest pose
+  Eigen::Affine3d bind_world = Eigen::Affine3d::Identity();  // scene world at the bind pose
+};
+
+struct BakedClip {
+  int gltf_animation = -1;
+  std::string name;
+  std::vector<double> times;
+  // local[t][k]: TRS of baked joint k (relative to its parent) at times[t].
+  std::vector<std::vector<Trs>> local;
+  // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
+  std::vector<std::vector<double>> ratio;
+  DeformationError error;  // pruning + quantization against full-precision weights, metres
+};
+
+struct BakedPart {
+  int mesh_part = -1;               // index into Character::meshes
+  std::vector<int> skin_joints;     // skeleton indices of the written skin, muscles appended
+  InfluenceSet full;                // muscles added, before pruning (skeleton indices)
+  QuantizedInfluences quantized;    // pruned to N, 0.001 steps (skin-local indices)
+  std::vector<VertexAttributeData> standard;  // JOINTS_n / WEIGHTS_n
+  PackedInfluences packed;                    // skin-local indices
+  std::vector<VertexAttributeData> packed_attributes;
+};
+
+struct BakeResult {
+  int influences = 0;
+  std::vector<BakedJoint> joints;  // 4 per muscle: base, tip, driver, skinned
+  std::vector<int> skinned_joint_of_muscle;  // index into joints
+  std::vector<BakedClip> clips;
+  std::vector<BakedPart> parts;
+  int vertex_count = 0;  // skinned vertices written
+  DeformationError error;  // over every clip
+};
+
+// Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.
+BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options);
+
+std::string muscleJointName(const MusclePart& part, MuscleJointRole role);
+
+}  // namespace rigbake

@@ -1,0 +1,176 @@
+// Muscle skin weights. Falloff around the origin-insertion segment: the smooth compact kernel
+// (1 - x^2)^2, x = distance / radius (Wendland-like; C1 at the rim). Smoothing: the umbrella operator,
+// Taubin, "A Signal Processing Approach to Fair Surface Design" (SIGGRAPH 1995), first pass only: on a
+// weight field it only blurs, so no shrink compensation is needed.
+#include "pipeline/muscle_weights.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+
+namespace rigbake {
+namespace {
+
+double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Eigen::Vector3d ab = b - a;
+  double length_squared = ab.squaredNorm();
+  double t = length_squared > 0 ? std::clamp((p - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
+  return (p - (a + ab * t)).norm();
+}
+
+double falloff(double distance, double radius) {
+  if (radius <= 0 || distance >= radius) return 0.0;
+  double x = distance / radius;
+  return (1.0 - x * x) * (1.0 - x * x);
+}
+
+void smooth(std::vector<double>* field, const SurfaceGraph& surface, const MuscleWeightOptions& options) {
+  std::vector<double> next(field->size());
+  for (int pass = 0; pass < options.smoothing_iterations; ++pass) {
+    for (int w = 0; w < surface.weldedCount(); ++w) {
+      const std::vector<int>& ring = surface.neighbours[w];
+      if (ring.empty()) {
+        next[w] = (*field)[w];
+        continue;
+      }
+      double mean = 0.0;
+      for (int n : ring) mean += (*field)[n];
+      mean /= static_cast<double>(ring.size());
+      next[w] = (*field)[w] + options.smoothing_lambda * (mean - (*field)[w]);
+    }
+    field->swap(next);
+  }
+}
+
+}  // namespace
+
+double muscleWeightRadius(const MusclePart& part, double body_height) {
+  if (part.weight_radius > 0) return part.weight_radius;
+  return 0.02 * body_height + 0.15 * (part.insertion.world - part.origin.world).norm();
+}
+
+std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height) {
+  std::vector<double> radii;
+  for (const MusclePart& muscle : muscles.parts) {
+    const double base = muscleWeightRadius(muscle, body_height);
+    if (muscle.weight_radius > 0) {
+      radii.push_back(base);
+      continue;
+    }
+    // Only skin the muscle could take weight from counts: vertices weighted to a joint it spans.
+    std::vector<char> spans(character.skeleton.size(), 0);
+    for (int joint : spannedJoints(character.skeleton, muscle)) spans[joint] = 1;
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const MeshPart& part : character.meshes) {
+      if (!part.skinned) continue;
+      const int slots = part.influences_per_vertex;
+      for (size_t v = 0; v < part.positions.size(); ++v) {
+        bool reachable = false;
+        for (int k = 0; k < slots && !reachable; ++k)
+          reachable = part.weights[v * slots + k] > 0 && spans[part.joints[v * slots + k]];
+        if (reachable) nearest = std::min(nearest, distanceToSegment(part.positions[v], muscle.origin.world, muscle.insertion.world));
+      }
+    }
+    radii.push_back(std::isfinite(nearest) ? std::max(base, nearest + 0.5 * base) : base);
+  }
+  return radii;
+}
+
+std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part) {
+  std::vector<int> up_from_origin, up_from_insertion;
+  for (int j = part.origin.joint; j >= 0; j = skeleton.parents[j]) up_from_origin.push_back(j);
+  for (int j = part.insertion.joint; j >= 0; j = skeleton.parents[j]) up_from_insertion.push_back(j);
+  // Drop the common ancestors above the lowest common one.
+  while (up_from_origin.size() >= 2 && up_from_insertion.size() >= 2 &&
+         up_from_origin[up_from_origin.size() - 2] == up_from_insertion[up_from_insertion.size() - 2]) {
+    up_from_origin.pop_back();
+    up_from_insertion.pop_back();
+  }
+  std::vector<int> path = up_from_origin;
+  if (!up_from_insertion.empty() && !up_from_origin.empty() && up_from_insertion.back() == up_from_origin.back())
+    up_from_insertion.pop_back();
+  path.insert(path.end(), up_from_insertion.begin(), up_from_insertion.end());
+  std::sort(path.begin(), path.end());
+  path.erase(std::unique(path.begin(), path.end()), path.end());
+  return path;
+}
+
+InfluenceSet addMuscleInfluences(const MeshPart& part, const InfluenceSet& base, const SurfaceGraph& surface,
+                                 const Skeleton& skeleton, const MuscleSet& muscles,
+                                 const std::vector<int>& muscle_joints, const std::vector<double>& radii,
+                                 const MuscleWeightOptions& options) {
+  assert(muscle_joints.size() == muscles.parts.size() && radii.size() == muscles.parts.size());
+  const int vertex_count = base.vertexCount();
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+
+  // Share of each muscle per welded vertex, smoothed on the surface.
+  std::vector<Eigen::Vector3d> welded_position(surface.weldedCount());
+  for (int v = vertex_count - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
+  std::vector<std::vector<double>> share(muscle_count);
+  std::vector<std::vector<char>> spans(muscle_count, std::vector<char>(skeleton.size(), 0));
+  for (int m = 0; m < muscle_count; ++m) {
+    const MusclePart& muscle = muscles.parts[m];
+    const double radius = radii[m];
+    share[m].assign(surface.weldedCount(), 0.0);
+    for (int w = 0; w < surface.weldedCount(); ++w) {
+      share[m][w] = options.peak_share *
+                    falloff(distanceToSegment(welded_position[w], muscle.origin.world, muscle.insertion.world), radius);
+    }
+    smooth(&share[m], surface, options);
+    for (int joint : spannedJoints(skeleton, muscle)) spans[m][joint] = 1;
+  }
+
+  // Each vertex gives muscle m that share of the weight it puts on the joints m spans.
+  std::vector<std::vector<std::pair<int, double>>> rows(vertex_count);
+  int widest = 0;
+  for (int v = 0; v < vertex_count; ++v) {
+    const int weld = surface.weld_of_vertex[v];
+    std::vector<double> taken(muscle_count, 0.0);
+    // The strongest muscles here, as many as the influence budget leaves room for (ties: file order).
+    int existing = 0;
+    for (int k = 0; k < base.slots_per_vertex; ++k) existing += base.weights[v * base.slots_per_vertex + k] > 0.0;
+    std::vector<int> order;
+    for (int m = 0; m < muscle_count; ++m) {
+      if (share[m][weld] > 0.0) order.push_back(m);
+    }
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return share[a][weld] > share[b][weld]; });
+    const size_t room = static_cast<size_t>(std::max(0, options.max_influences - existing));
+    std::vector<double> share_here(muscle_count, 0.0);
+    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[order[i]] = share[order[i]][weld];
+    double total = 0.0;
+    for (int m = 0; m < muscle_count; ++m) total += share_here[m];
+    const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
+    std::vector<std::pair<int, double>>& row = rows[v];
+    for (int k = 0; k < base.slots_per_vertex; ++k) {
+      const int joint = base.joints[v * base.slots_per_vertex + k];
+      double weight = base.weights[v * base.slots_per_vertex + k];
+      if (weight <= 0.0) continue;
+      double given = 0.0;
+      for (int m = 0; m < muscle_count; ++m) {
+        if (!spans[m][joint]) continue;
+        double amount = weight * share_here[m] * limit;
+        taken[m] += amount;
+        given += amount;
+      }
+      row.emplace_back(joint, weight - given);
+    }
+    for (int m = 0; m < muscle_count; ++m) {
+      if (taken[m] > 0.0) row.emplace_back(muscle_joints[m], taken[m]);
+    }
+    widest = std::max(widest, static_cast<int>(row.size()));
+  }
+  InfluenceSet result;
+  result.slots_per_vertex = std::max(widest, base.slots_per_vertex);
+  result.joints.assign(static_cast<size_t>(vertex_count) * result.slots_per_vertex, 0);
+  result.weights.assign(result.joints.size(), 0.0);
+  for (int v = 0; v < vertex_count; ++v) {
+    for (size_t k = 0; k < rows[v].size(); ++k) {
+      result.joints[v * result.slots_per_vertex + k] = rows[v][k].first;
+      result.weights[v * result.slots_per_vertex + k] = rows[v][k].second;
+    }
+  }
+  return result;
+}
+
+}  // namespace rigbake

@@ -1,0 +1,22 @@
+// Rounding the pruned weights to the talk's 0.001 precision so that the skin moves as little as
+// possible away from the full-precision skin over the character's own animation.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "pipeline/influences.h"
+
+namespace rigbake {
+
+// Skin matrices (joint world * inverse bind) of every joint at one sampled frame.
+using SkinFrame = std::vector<Eigen::Affine3d>;
+
+// Like quantizeInfluences(set, 1000): every weight is rounded down or up to a multiple of 0.001 and
+// each vertex sums to exactly 1000. Of the roundings that do so, it picks per vertex the one whose
+// linear-blend skinning error, summed in squares over `frames`, is smallest (largest-remainder
+// rounding wins ties, and is what an empty `frames` gives). Canonical slot order as in influences.h.
+QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                      const std::vector<SkinFrame>& frames);
+
+}  // namespace rigbake

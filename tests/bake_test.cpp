@@ -1,0 +1,212 @@
+// The bake on the sample and every shared asset: the written glTF passes the Khronos validator and
+// Blender's importer, the bind pose is unchanged, the packed buffers decode exactly, and the figures
+// (deformation error, bytes per vertex) are what the docs claim.
+#include "pipeline/bake.h"
+
+#include <tiny_gltf.h>
+
+#include "anatomy_fixture.h"
+#include "cli_support.h"
+#include "external_tools.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_write.h"
+#include "pipeline/muscle_joint.h"
+#include "pipeline/pose.h"
+
+using namespace rigbake;
+namespace ext = rigbake::test::external;
+
+namespace {
+
+struct BakedCharacter {
+  std::string path;
+  LoadedCharacter loaded;
+  LandmarkSet landmarks;
+  MuscleSet muscles;
+  BakeResult bake;
+  std::string bytes;  // the baked GLB
+};
+
+BakedCharacter bakeFile(const std::string& path, int influences) {
+  BakedCharacter baked;
+  baked.path = path;
+  test::Resolved r = test::resolveShipped(path);
+  baked.loaded = loadCharacter(path);
+  baked.landmarks = r.landmarks;
+  baked.muscles = placeMuscles(baked.loaded.character, baked.landmarks, test::gowPreset(), Sides::kBoth);
+  BakeOptions options;
+  options.influences = influences;
+  baked.bake = bakeCharacter(baked.loaded.character, baked.muscles, options);
+  baked.bytes = serializeGltf(bakedModel(*baked.loaded.document, baked.loaded.character, baked.muscles, baked.bake), true);
+  return baked;
+}
+
+std::vector<std::string> characterPaths() {
+  std::vector<std::string> paths = {test::sampleGlbPath()};
+  for (const std::string& name : test::sharedAssetNames()) {
+    std::string path = test::requireAsset(name);
+    if (!path.empty()) paths.push_back(path);
+  }
+  return paths;
+}
+
+// Baked at 10 influences once per test process.
+const std::vector<BakedCharacter>& bakedAtTen() {
+  static const std::vector<BakedCharacter> all = [] {
+    std::vector<BakedCharacter> result;
+    for (const std::string& path : characterPaths()) result.push_back(bakeFile(path, 10));
+    return result;
+  }();
+  return all;
+}
+
+const ext::ValidationSummary& validatedInput(const std::string& path) {
+  static std::map<std::string, ext::ValidationSummary> cache;
+  auto it = cache.find(path);
+  if (it == cache.end()) it = cache.emplace(path, ext::validateWithKhronos(path)).first;
+  return it->second;
+}
+
+}  // namespace
+
+TEST_CASE("bake: every baked file passes the Khronos glTF validator with 0 errors, at 4, 7 and 10 influences") {
+  if (!ext::requireTool(ext::validatorAvailable(), ext::validatorHint())) return;
+  test::TempDir dir;
+  for (const std::string& path : characterPaths()) {
+    for (int influences : {4, 7, 10}) {
+      INFO(path << " at " << influences << " influences");
+      BakedCharacter baked = bakeFile(path, influences);
+      std::string out = dir / ("baked" + std::to_string(influences) + ".glb");
+      std::ofstream(out, std::ios::binary) << baked.bytes;
+      ext::ValidationSummary summary = ext::validateWithKhronos(out);
+      INFO(summary.raw.substr(0, 2000));
+      CHECK(summary.errors == 0);
+      // Warnings only where the input already had them (docs/validator-warnings.md).
+      const std::vector<std::string>& input_warnings = validatedInput(path).warning_codes;
+      for (const std::string& code : summary.warning_codes)
+        CHECK(std::find(input_warnings.begin(), input_warnings.end(), code) != input_warnings.end());
+    }
+  }
+}
+
+TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy, every skin and every clip") {
+  for (const BakedCharacter& baked : bakedAtTen()) {
+    INFO(baked.path);
+    test::TempDir dir;
+    std::ofstream(dir / "b.glb", std::ios::binary) << baked.bytes;
+    Character c = loadCharacter(dir / "b.glb").character;
+    const Skeleton& before = baked.loaded.character.skeleton;
+    CHECK(c.skeleton.size() == before.size() + 28);  // the skinned joints are skin joints now
+    for (const MusclePart& part : baked.muscles.parts) {
+      int skinned = c.skeleton.find(muscleJointName(part, MuscleJointRole::kSkinned));
+      REQUIRE(skinned >= 0);
+      CHECK(c.skeleton.names[c.skeleton.parents[skinned]] == before.names[part.origin.joint]);
+    }
+    for (const MeshPart& mesh : c.meshes) {
+      if (!mesh.skinned) continue;
+      CHECK(mesh.influences_per_vertex == 12);  // 10 influences in three JOINTS_n/WEIGHTS_n sets
+      for (int v = 0; v < static_cast<int>(mesh.positions.size()); ++v) {
+        double sum = 0;
+        for (int k = 0; k < mesh.influences_per_vertex; ++k) sum += mesh.weights[v * mesh.influences_per_vertex + k];
+        REQUIRE(sum == Approx(1.0).margin(1e-12));
+      }
+    }
+    // Every clip animates every muscle joint: T and R for base, tip and driver, T, R and S for the skinned one.
+    for (const Clip& clip : c.clips) {
+      int muscle_tracks = 0;
+      for (const Track& track : clip.tracks) {
+        const std::string& name = c.skeleton.names[track.joint];
+        muscle_tracks += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
+      }
+      CHECK(muscle_tracks == 28 * 3);  // skin joints only: the skinned joints' T, R, S
+    }
+    CHECK(c.clips.size() == baked.loaded.character.clips.size());
+  }
+}
+
+TEST_CASE("bake: at the bind pose the baked skin reproduces the original vertices") {
+  for (const BakedCharacter& baked : bakedAtTen()) {
+    INFO(baked.path);
+    test::TempDir dir;
+    std::ofstream(dir / "b.glb", std::ios::binary) << baked.bytes;
+    Character reloaded = loadCharacter(dir / "b.glb").character;
+    const Skeleton& original = baked.loaded.character.skeleton;
+    const double h = baked.landmarks.body.height;
+    // Skin matrices at the bind pose: original joints at their bind, muscle joints evaluated by the
+    // muscle model, both against the inverse bind matrices as written in the file.
+    Pose bind = bindPose(original);
+    std::vector<Eigen::Affine3d> skin(reloaded.skeleton.size(), Eigen::Affine3d::Identity());
+    for (int j = 0; j < reloaded.skeleton.size(); ++j) {
+      int source = original.find(reloaded.skeleton.names[j]);
+      if (source >= 0) skin[j] = original.bind_world[source] * reloaded.skeleton.bind_world[j].inverse();
+    }
+    for (const MusclePart& part : baked.muscles.parts) {
+      int j = reloaded.skeleton.find(muscleJointName(part, MuscleJointRole::kSkinned));
+      skin[j] = evaluateMuscle(part, original, bind).skinned * reloaded.skeleton.bind_world[j].inverse();
+    }
+    double worst = 0.0;
+    for (size_t p = 0; p < reloaded.meshes.size(); ++p) {
+      const MeshPart& mesh = reloaded.meshes[p];
+      if (!mesh.skinned) continue;
+      for (int v = 0; v < static_cast<int>(mesh.positions.size()); ++v) {
+        Eigen::Vector3d skinned = Eigen::Vector3d::Zero();
+        for (int k = 0; k < mesh.influences_per_vertex; ++k) {
+          double w = mesh.weights[v * mesh.influences_per_vertex + k];
+          if (w > 0) skinned += w * (skin[mesh.joints[v * mesh.influences_per_vertex + k]] * mesh.positions[v]);
+        }
+        worst = std::max(worst, (skinned - baked.loaded.character.meshes[p].positions[v]).norm());
+      }
+    }
+    CHECK(worst < 1e-6 * h);
+  }
+}
+
+TEST_CASE("bake: packed influences decode to exactly the quantized weights on every vertex") {
+  for (int influences : {4, 7, 10}) {
+    for (const std::string& path : characterPaths()) {
+      INFO(path << " at " << influences);
+      BakedCharacter baked = bakeFile(path, influences);
+      for (const BakedPart& part : baked.bake.parts) {
+        QuantizedInfluences decoded = unpackInfluences(part.packed);
+        REQUIRE(decoded.slots_per_vertex == part.quantized.slots_per_vertex);
+        CHECK(decoded.joints == part.quantized.joints);
+        CHECK(decoded.weights == part.quantized.weights);
+        for (int v = 0; v < part.quantized.vertexCount(); ++v) {
+          int sum = 0;
+          for (int k = 0; k < part.quantized.slots_per_vertex; ++k) sum += part.quantized.weights[v * part.quantized.slots_per_vertex + k];
+          REQUIRE(sum == 1000);
+        }
+      }
+    }
+  }
+}
+
+TEST_CASE("bake: two bakes of the same inputs are byte-identical") {
+  for (const std::string& path : characterPaths()) {
+    INFO(path);
+    CHECK(bakeFile(path, 7).bytes == bakeFile(path, 7).bytes);
+  }
+}
+
+TEST_CASE("bake: the muscles' share of the weights comes from the joints they span") {
+  for (const BakedCharacter& baked : bakedAtTen()) {
+    INFO(baked.path);
+    const Skeleton& skeleton = baked.loaded.character.skeleton;
+    std::vector<double> muscle_weight(baked.muscles.parts.size(), 0.0);
+    for (const BakedPart& part : baked.bake.parts) {
+      const InfluenceSet& full = part.full;
+      for (size_t i = 0; i < full.joints.size(); ++i) {
+        int m = full.joints[i] - skeleton.size();
+        if (m >= 0 && full.weights[i] > 0) muscle_weight[m] += full.weights[i];
+      }
+    }
+    // The sample and the fully skinned assets give every muscle some skin; RobotExpressive only skins
+    // its hands, so its arm and back muscles have none.
+    if (baked.path.find("RobotExpressive") == std::string::npos) {
+      for (size_t m = 0; m < muscle_weight.size(); ++m) {
+        INFO(baked.muscles.parts[m].fullName());
+        CHECK(muscle_weight[m] > 0.1);
+      }
+    }
+  }
+}
