@@ -1,0 +1,123 @@
+// `rigbake bake` from the command line: figures in --stats, the packed raw file, determinism, and
+// bad input refused with a stable code and no output.
+#include <nlohmann/json.hpp>
+
+#include "cli_support.h"
+#include "formats/packed_file.h"
+
+using namespace rigbake::test;
+
+namespace {
+void expectNoOutputs(const TempDir& dir) {
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path)) {
+    const std::string name = entry.path().filename().string();
+    CHECK((name == "muscles.json" || name == "typo.json" || name == "twist_only.json"));
+  }
+}
+}  // namespace
+
+TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented figures") {
+  TempDir dir;
+  CliResult r = runCli("bake " + sampleGlbPathForCli() + " --influences 10 -o " + (dir / "baked.glb") + " --stats " +
+                       (dir / "stats.json") + " --packed-out " + (dir / "baked.rbpk"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(lineCount(r.err) == 1);  // the summary line
+  nlohmann::json stats = nlohmann::json::parse(slurp(dir / "stats.json"));
+  CHECK(stats["influences"] == 10);
+  CHECK(stats["muscle_joints"] == 28);
+  CHECK(stats["vertices"].get<int>() >= 10000);
+  CHECK(stats["units"] == "m");
+  for (const char* clip : {"ElbowFlexion", "ArmRaise", "ForearmTwist"}) {
+    INFO(clip);
+    REQUIRE(stats["deformation_error_mm"]["per_clip"].contains(clip));
+    CHECK(stats["deformation_error_mm"]["per_clip"][clip]["max"].get<double>() <= stats["deformation_error_mm"]["max"].get<double>());
+  }
+  // 10 influences at 0.001: the worst vertex over every frame moves less than a fifth of a millimetre.
+  CHECK(stats["deformation_error_mm"]["max"].get<double>() < 0.2);
+  CHECK(stats["deformation_error_mm"]["rms"].get<double>() < 0.01);
+  // Skin data per vertex: u16 weights + u8 joints in 3 sets of 4 = 36 B; packed 10 = 3 words + 10 u8 -> 24 B.
+  CHECK(stats["bytes_per_vertex"]["gltf"] == 36);
+  CHECK(stats["bytes_per_vertex"]["packed"] == 24);
+  std::vector<rigbake::PackedInfluences> packed = rigbake::readPackedFile(dir / "baked.rbpk");
+  REQUIRE(packed.size() == 1);
+  CHECK(packed[0].influences == 10);
+  CHECK(packed[0].vertex_count == stats["vertices"].get<int>());
+}
+
+TEST_CASE("cli bake: fewer influences cost more error, in the reported figures") {
+  TempDir dir;
+  double previous = 0.0;
+  for (int influences : {10, 7, 4}) {
+    CliResult r = runCli("bake " + sampleGlbPathForCli() + " --json --influences " + std::to_string(influences) + " -o " +
+                         (dir / "b.glb"));
+    REQUIRE(r.exit_code == 0);
+    double max_mm = nlohmann::json::parse(r.out)["deformation_error_mm"]["max"].get<double>();
+    CHECK(max_mm > previous);
+    previous = max_mm;
+  }
+}
+
+TEST_CASE("cli bake: the same inputs give byte-identical files") {
+  TempDir dir;
+  REQUIRE(runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "muscles.json")).exit_code == 0);
+  for (const char* name : {"a", "b"}) {
+    std::string n = name;
+    REQUIRE(runCli("bake " + sampleGlbPathForCli() + " --muscles " + (dir / "muscles.json") + " --influences 7 -o " +
+                   (dir / (n + ".glb")) + " --stats " + (dir / (n + ".json")) + " --packed-out " + (dir / (n + ".rbpk")))
+                .exit_code == 0);
+  }
+  CHECK(slurp(dir / "a.glb") == slurp(dir / "b.glb"));
+  CHECK(slurp(dir / "a.rbpk") == slurp(dir / "b.rbpk"));
+  // The stats name their own output file, so compare them without it.
+  nlohmann::json a = nlohmann::json::parse(slurp(dir / "a.json")), b = nlohmann::json::parse(slurp(dir / "b.json"));
+  a.erase("output");
+  b.erase("output");
+  CHECK(a == b);
+}
+
+TEST_CASE("cli bake: bad input gives one line, a stable code, and no output files") {
+  TempDir dir;
+  const std::string out = dir / "baked.glb";
+  auto bake = [&](const std::string& args) {
+    return runCli("bake " + args + " -o " + out + " --stats " + (dir / "stats.json") + " --packed-out " + (dir / "p.rbpk"));
+  };
+  SECTION("--influences 3") {
+    CliResult r = bake(sampleGlbPathForCli() + " --influences 3");
+    CHECK(r.exit_code == 1);
+    CHECK(lineCount(r.err) == 1);
+    CHECK(r.err.find("--influences") != std::string::npos);
+  }
+  SECTION("muscle JSON made for another character") {
+    std::string cesium = requireAsset("CesiumMan.glb");
+    if (cesium.empty()) return;
+    REQUIRE(runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "muscles.json")).exit_code == 0);
+    CliResult r = bake(cesium + " --muscles " + (dir / "muscles.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err.rfind("MUSCLES_MISMATCH ", 0) == 0);
+    CHECK(lineCount(r.err) == 1);
+  }
+  SECTION("a preset naming a joint the character lacks") {
+    std::string cesium = requireAsset("CesiumMan.glb");
+    if (cesium.empty()) return;
+    // Attach the biceps to the twist joints only: CesiumMan has none.
+    std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");
+    std::string from = "\"origin_attach\": [\"upper_arm_twist\", \"upper_arm\"]";
+    size_t at = preset.find(from);
+    REQUIRE(at != std::string::npos);
+    preset.replace(at, from.size(), "\"origin_attach\": [\"upper_arm_twist\"]");
+    std::ofstream(dir / "twist_only.json") << preset;
+    CliResult r = bake(cesium + " --preset " + (dir / "twist_only.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err.rfind("LANDMARK_UNRESOLVED ", 0) == 0);
+    CHECK(r.err.find("twist_only.json#/muscles/8/origin_attach") != std::string::npos);
+    CHECK(r.err.find("upper_arm_twist_l") != std::string::npos);
+  }
+  SECTION("a muscle file that is not JSON") {
+    std::ofstream(dir / "typo.json") << "{\"Arms\": ";
+    CliResult r = bake(sampleGlbPathForCli() + " --muscles " + (dir / "typo.json"));
+    CHECK(r.exit_code == 3);
+    CHECK(r.err.rfind("JSON_PARSE_FAILED ", 0) == 0);
+  }
+  expectNoOutputs(dir);
+}
