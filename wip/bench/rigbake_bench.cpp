@@ -1,0 +1,73 @@
+// Times the stages of one bake in this process and prints one JSON line: seconds per stage and the
+// peak resident memory. bench/run calls it once per input (a fresh process, so the peak is the
+// input's own) and prints the table.
+#include <sys/resource.h>
+
+#include <chrono>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "anatomy/placement.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_document.h"
+#include "formats/gltf_write.h"
+#include "formats/preset_json.h"
+#include "pipeline/bake.h"
+
+using namespace rigbake;
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences]\n";
+    return 1;
+  }
+  const std::string input = argv[1], output = argv[2], presets = argv[3];
+  const int influences = argc > 4 ? std::stoi(argv[4]) : 10;
+  auto clock = std::chrono::steady_clock::now();
+  auto lap = [&clock]() {
+    auto now = std::chrono::steady_clock::now();
+    double seconds = std::chrono::duration<double>(now - clock).count();
+    clock = now;
+    return seconds;
+  };
+  try {
+    LoadedCharacter loaded = loadCharacter(input);
+    const double load = lap();
+    std::vector<NamingMap> maps = readNamingMaps(presets + "/skeletons");
+    LandmarkRules rules = readLandmarkRules(presets + "/landmarks.json");
+    MusclePreset preset = readMusclePreset(presets + "/muscles/gow_biped.json");
+    LandmarkInputs inputs;
+    inputs.maps = &maps;
+    inputs.rules = &rules;
+    LandmarkSet landmarks = resolveLandmarks(loaded.character, inputs);
+    MuscleSet muscles = placeMuscles(loaded.character, landmarks, preset, Sides::kBoth);
+    const double place = lap();
+    BakeOptions options;
+    options.influences = influences;
+    BakeTimings timings;
+    BakeResult bake = bakeCharacter(loaded.character, muscles, options, &timings);
+    lap();
+    writeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), output);
+    const double write = lap();
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    std::cout << nlohmann::json{{"input", input},
+                                {"vertices", bake.vertex_count},
+                                {"clips", bake.clips.size()},
+                                {"load", load},
+                                {"place", place},
+                                {"evaluate", timings.evaluate},
+                                {"weights", timings.weights},
+                                {"pack", timings.pack},
+                                {"error", timings.error},
+                                {"write", write},
+                                {"peak_mb", usage.ru_maxrss / 1024.0}}
+                     .dump()
+              << "\n";
+  } catch (const std::exception& e) {
+    std::cerr << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

@@ -1,0 +1,169 @@
+#include "cli/build_job.h"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "anatomy/error.h"
+#include "anatomy/placement.h"
+#include "cli/common.h"
+#include "formats/atomic_file.h"
+#include "formats/build_manifest.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_write.h"
+#include "formats/muscle_json.h"
+#include "formats/preset_json.h"
+#include "pipeline/bake.h"
+#include "cli/build_reports.h"
+
+namespace rigbake::cli {
+
+const char* jobStatusName(JobStatus status) {
+  switch (status) {
+    case JobStatus::kBuilt: return "built";
+    case JobStatus::kUpToDate: return "up-to-date";
+    case JobStatus::kFailed: return "failed";
+  }
+  return "failed";
+}
+
+SharedPresets loadSharedPresets(const std::string& presets_dir) {
+  SharedPresets shared;
+  shared.maps = readNamingMaps(presets_dir + "/skeletons");
+  shared.rules = readLandmarkRules(presets_dir + "/landmarks.json");
+  return shared;
+}
+
+JobOutcome failedJob(const BuildCharacter& character, const std::string& error) {
+  JobOutcome outcome;
+  outcome.name = character.name;
+  outcome.status = JobStatus::kFailed;
+  outcome.error = error;
+  return outcome;
+}
+
+namespace {
+
+struct Loaded {
+  LoadedCharacter character;
+  LandmarkSet landmarks;
+};
+
+Loaded loadResolved(const std::string& path, const SharedPresets& presets) {
+  Loaded loaded;
+  loaded.character = loadCharacter(path);
+  LandmarkInputs inputs;
+  inputs.maps = &presets.maps;
+  inputs.rules = &presets.rules;
+  loaded.landmarks = resolveLandmarks(loaded.character.character, inputs);
+  return loaded;
+}
+
+// Everything that decides a character's outputs, hashed: its files' bytes, the preset, the muscle
+// source, the options and the rigbake version.
+std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& character) {
+  std::vector<std::string> files = {character.input, character.preset};
+  if (!character.muscles.empty()) files.push_back(character.muscles);
+  if (!character.muscles_from.empty()) {
+    for (const BuildCharacter& source : manifest.characters) {
+      if (source.name == character.muscles_from) {
+        files.push_back(source.input);
+        files.push_back(characterOutputs(manifest, source).muscles);
+      }
+    }
+  }
+  return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
+                                std::to_string(character.influences) + " muscles_from " + character.muscles_from);
+}
+
+void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobOutcome& outcome) {
+  nlohmann::json stamp = {{"hash", hash},
+                          {"status", jobStatusName(outcome.status)},
+                          {"error", outcome.error},
+                          {"checks_failed", outcome.checks_failed}};
+  writeFileAtomically(out.stamp, stamp.dump(2) + "\n");
+}
+
+}  // namespace
+
+JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& character) {
+  CharacterOutputs out = characterOutputs(manifest, character);
+  std::ifstream in(out.stamp);
+  if (!in) return failedJob(character, "not built (no " + out.stamp + ")");
+  nlohmann::json stamp = nlohmann::json::parse(in, nullptr, false);
+  if (!stamp.is_object()) return failedJob(character, "unreadable build stamp " + out.stamp);
+  JobOutcome outcome;
+  outcome.name = character.name;
+  std::string status = stamp.value("status", "failed");
+  outcome.status = status == "built" ? JobStatus::kBuilt : status == "up-to-date" ? JobStatus::kUpToDate : JobStatus::kFailed;
+  outcome.error = stamp.value("error", "");
+  outcome.checks_failed = stamp.value("checks_failed", 0);
+  return outcome;
+}
+
+JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
+                           bool force) {
+  const CharacterOutputs out = characterOutputs(manifest, character);
+  std::string hash;
+  try {
+    hash = inputsHash(manifest, character);
+    if (!force) {
+      JobOutcome previous = readJobOutcome(manifest, character);
+      std::ifstream stamp_file(out.stamp);
+      nlohmann::json stamp = nlohmann::json::parse(stamp_file, nullptr, false);
+      bool outputs_exist = true;
+      for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html})
+        outputs_exist &= std::filesystem::exists(path);
+      if (stamp.is_object() && stamp.value("hash", "") == hash && previous.status != JobStatus::kFailed && outputs_exist) {
+        previous.status = JobStatus::kUpToDate;
+        return previous;
+      }
+    }
+    std::filesystem::create_directories(out.directory);
+    MusclePreset preset = readMusclePreset(character.preset);
+    Loaded loaded = loadResolved(character.input, presets);
+    const Character& body = loaded.character.character;
+    MuscleSet muscles;
+    if (!character.muscles.empty()) {
+      muscles = readMuscleJson(character.muscles, body, loaded.landmarks, preset);
+    } else if (!character.muscles_from.empty()) {
+      const BuildCharacter* source = nullptr;
+      for (const BuildCharacter& c : manifest.characters) {
+        if (c.name == character.muscles_from) source = &c;
+      }
+      Loaded from = loadResolved(source->input, presets);
+      MuscleSet source_muscles =
+          readMuscleJson(characterOutputs(manifest, *source).muscles, from.character.character, from.landmarks, preset);
+      muscles = retargetForBuild(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks);
+    } else {
+      muscles = placeMuscles(body, loaded.landmarks, preset, Sides::kBoth);
+    }
+    muscles.character = character.name + ".glb";
+    BakeOptions options;
+    options.influences = character.influences;
+    BakeResult bake = bakeCharacter(body, muscles, options);
+    std::string model = serializeGltf(bakedModel(*loaded.character.document, body, muscles, bake), true);
+    writeFileAtomically(out.muscles, muscleJson(muscles, body.skeleton, preset.name));
+    writeFileAtomically(out.model, model);
+    JobOutcome outcome;
+    outcome.name = character.name;
+    outcome.status = JobStatus::kBuilt;
+    outcome.checks_failed = writeCharacterReports(out, character.name, out.model, out.muscles, preset);
+    writeStamp(out, hash, outcome);
+    return outcome;
+  } catch (const Error& error) {
+    JobOutcome outcome = failedJob(character, error.what());
+    try {
+      std::filesystem::create_directories(out.directory);
+      writeStamp(out, hash, outcome);
+    } catch (const std::exception&) {
+      // The failure itself is what the summary reports; a missing stamp only means a rebuild next time.
+    }
+    return outcome;
+  } catch (const std::exception& error) {
+    return failedJob(character, std::string("INTERNAL: ") + error.what());
+  }
+}
+
+}  // namespace rigbake::cli

@@ -1,0 +1,120 @@
+#include "formats/build_manifest.h"
+
+#include <cstdint>
+#include <fstream>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+#include "anatomy/error.h"
+#include "formats/atomic_file.h"
+#include "formats/json_reader.h"
+
+namespace rigbake {
+namespace {
+
+std::string directoryOf(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
+}
+
+std::string resolve(const std::string& directory, const std::string& path) {
+  if (path.empty() || path[0] == '/') return path;
+  return directory == "." ? path : directory + "/" + path;
+}
+
+bool exists(const std::string& path) { return std::ifstream(path).good(); }
+
+// glTF files name their buffers and images by uri; those bytes are inputs too.
+std::vector<std::string> referencedFiles(const std::string& gltf_path) {
+  std::vector<std::string> files;
+  if (gltf_path.size() < 5 || gltf_path.compare(gltf_path.size() - 5, 5, ".gltf") != 0) return files;
+  nlohmann::json json = nlohmann::json::parse(readFile(gltf_path), nullptr, false);
+  if (!json.is_object()) return files;
+  for (const char* key : {"buffers", "images"}) {
+    if (!json.contains(key) || !json[key].is_array()) continue;
+    for (const auto& item : json[key]) {
+      if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+      std::string uri = item["uri"].get<std::string>();
+      if (uri.rfind("data:", 0) == 0) continue;
+      files.push_back(resolve(directoryOf(gltf_path), uri));
+    }
+  }
+  return files;
+}
+
+}  // namespace
+
+BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", "MANIFEST_INVALID");
+  in.allowKeys({"$schema", "preset", "influences", "out", "characters"});
+  BuildManifest manifest;
+  manifest.file = path;
+  manifest.directory = directoryOf(path);
+  auto presetPath = [&](const JsonReader& value) {
+    std::string preset = value.asString();
+    std::string relative = resolve(manifest.directory, preset);
+    if (exists(relative)) return relative;
+    std::string shipped = default_preset_dir + "/muscles/" + preset + ".json";
+    if (exists(shipped)) return shipped;
+    value.fail("preset '" + preset + "' is neither a file (relative to the manifest) nor a shipped preset name");
+  };
+  manifest.preset = in.has("preset") ? presetPath(in.at("preset")) : default_preset_dir + "/muscles/gow_biped.json";
+  auto influencesOf = [](const JsonReader& value) {
+    int n = value.asInt();
+    if (n != 4 && n != 7 && n != 10) value.fail("must be 4, 7 or 10");
+    return n;
+  };
+  if (in.has("influences")) manifest.influences = influencesOf(in.at("influences"));
+  manifest.out = resolve(manifest.directory, in.has("out") ? in.at("out").asString() : std::string("build"));
+  JsonReader characters = in.at("characters");
+  if (characters.arraySize() == 0) characters.fail("must list at least one character");
+  std::set<std::string> names;
+  for (size_t i = 0; i < characters.arraySize(); ++i) {
+    JsonReader item = characters.at(i);
+    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences"});
+    BuildCharacter c;
+    c.pointer = item.pointer();
+    c.name = item.at("name").asString();
+    if (c.name.empty() || c.name.find_first_of("/\\ \t:$") != std::string::npos || c.name[0] == '.')
+      item.at("name").fail("must be a plain file name (no slashes, spaces, ':' or '$', not starting with '.')");
+    if (!names.insert(c.name).second) item.at("name").fail("duplicate character name '" + c.name + "'");
+    c.input = resolve(manifest.directory, item.at("input").asString());
+    if (item.has("muscles_from")) c.muscles_from = item.at("muscles_from").asString();
+    if (item.has("muscles")) c.muscles = resolve(manifest.directory, item.at("muscles").asString());
+    if (!c.muscles.empty() && !c.muscles_from.empty())
+      item.fail("give either muscles or muscles_from, not both");
+    if (c.muscles_from == c.name && !c.name.empty()) item.at("muscles_from").fail("a character cannot retarget from itself");
+    c.preset = item.has("preset") ? presetPath(item.at("preset")) : manifest.preset;
+    c.influences = item.has("influences") ? influencesOf(item.at("influences")) : manifest.influences;
+    manifest.characters.push_back(std::move(c));
+  }
+  buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work
+  return manifest;
+}
+
+std::string contentHash(const std::vector<std::string>& files, const std::string& extra) {
+  std::uint64_t hash = 1469598103934665603ull;
+  auto mix = [&hash](const std::string& bytes) {
+    for (unsigned char c : bytes) {
+      hash ^= c;
+      hash *= 1099511628211ull;
+    }
+    // Separate fields so that moving bytes between them changes the hash.
+    hash ^= bytes.size();
+    hash *= 1099511628211ull;
+  };
+  std::vector<std::string> all;
+  for (const std::string& file : files) {
+    all.push_back(file);
+    for (const std::string& referenced : referencedFiles(file)) all.push_back(referenced);
+  }
+  for (const std::string& file : all) mix(readFile(file));
+  mix(extra);
+  std::ostringstream hex;
+  hex << std::hex << std::setw(16) << std::setfill('0') << hash;
+  return hex.str();
+}
+
+}  // namespace rigbake

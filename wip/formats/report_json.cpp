@@ -1,0 +1,99 @@
+#include "formats/report_json.h"
+
+#include <cmath>
+
+namespace rigbake {
+namespace {
+
+// JSON has no NaN or infinity; a value that is not finite is written as null.
+nlohmann::ordered_json number(double value) {
+  return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json checkJson(const CheckResult& check) {
+  nlohmann::ordered_json findings = nlohmann::ordered_json::array();
+  for (const CheckFinding& finding : check.findings) {
+    findings.push_back({{"location", finding.location}, {"measured", number(finding.measured)}, {"message", finding.message}});
+  }
+  return {
+      {"code", check.code},
+      {"severity", severityName(check.severity)},
+      {"status", statusName(check.status)},
+      {"comparison", check.comparison == Comparison::kAtMost ? "<=" : ">="},
+      {"threshold", number(check.threshold)},
+      {"measured", check.has_measured ? number(check.measured) : nlohmann::ordered_json(nullptr)},
+      {"unit", check.unit},
+      {"location", check.location},
+      {"message", check.message},
+      {"title", check.title},
+      {"findings", findings},
+  };
+}
+
+}  // namespace
+
+nlohmann::ordered_json reportJsonValue(const Report& report) {
+  int failed_errors = 0, failed_warnings = 0, passed = 0, skipped = 0;
+  nlohmann::ordered_json checks = nlohmann::ordered_json::array();
+  for (const CheckResult& check : report.checks) {
+    checks.push_back(checkJson(check));
+    if (check.status == CheckStatus::kPass) ++passed;
+    if (check.status == CheckStatus::kSkipped) ++skipped;
+    if (check.status == CheckStatus::kFail) ++(check.severity == Severity::kError ? failed_errors : failed_warnings);
+  }
+  nlohmann::ordered_json ratios = nlohmann::ordered_json::array();
+  for (const ClipRatios& clip : report.ratios) {
+    nlohmann::ordered_json muscles = nlohmann::ordered_json::array();
+    for (const MuscleRatioSeries& series : clip.muscles) {
+      nlohmann::ordered_json values = nlohmann::ordered_json::array();
+      for (double r : series.ratio) values.push_back(number(r));
+      muscles.push_back({{"muscle", series.muscle},
+                         {"group", series.group},
+                         {"compression", series.compression},
+                         {"stretch", series.stretch},
+                         {"ratio", values}});
+    }
+    ratios.push_back({{"clip", clip.clip}, {"times", clip.times}, {"muscles", muscles}});
+  }
+  nlohmann::ordered_json deformation = nlohmann::ordered_json::array();
+  for (const ClipDeformation& clip : report.deformation) {
+    deformation.push_back({{"clip", clip.clip},
+                           {"samples", clip.samples},
+                           {"max_m", number(clip.max_displacement)},
+                           {"rms_m", number(clip.rms_displacement)}});
+  }
+  nlohmann::ordered_json memory = nlohmann::ordered_json::array();
+  for (const SkinLayoutSize& layout : report.memory) {
+    memory.push_back({{"layout", layout.id},
+                      {"influences", layout.influences},
+                      {"bytes_per_vertex", layout.bytes_per_vertex},
+                      {"total_bytes", layout.total_bytes}});
+  }
+  return {
+      {"report_version", kReportJsonVersion},
+      {"tool", {{"name", "rigbake"}, {"version", RIGBAKE_VERSION}}},
+      {"character", report.character},
+      {"passed", report.passed()},
+      {"summary",
+       {{"checks", report.checks.size()},
+        {"passed", passed},
+        {"failed_errors", failed_errors},
+        {"failed_warnings", failed_warnings},
+        {"skipped", skipped}}},
+      {"character_stats",
+       {{"joints", report.joints},
+        {"skinned_vertices", report.vertices},
+        {"muscles", report.muscles},
+        {"packed_influences", report.influences}}},
+      {"checks", checks},
+      {"plots",
+       {{"muscle_ratio", ratios},
+        {"influence_histogram", report.influence_histogram},
+        {"packed_deformation", deformation},
+        {"memory_table", memory}}},
+  };
+}
+
+std::string reportJson(const Report& report) { return reportJsonValue(report).dump(2) + "\n"; }
+
+}  // namespace rigbake

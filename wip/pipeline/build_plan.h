@@ -1,0 +1,54 @@
+// The batch build's plan as plain data: which characters to build, in which order (a character whose
+// muscles are retargeted from another comes after it), which shard of a CI matrix each belongs to, and
+// the Ninja graph that lets Ninja (or a distributed executor of Ninja graphs) schedule them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace rigbake {
+
+struct BuildCharacter {
+  std::string name;
+  std::string input;         // path, already resolved against the manifest's directory
+  std::string muscles_from;  // name of another character to retarget muscles from, or empty
+  std::string muscles;       // a muscle JSON to use, or empty
+  std::string preset;        // preset path for this character (manifest default when not given)
+  int influences = 10;
+  std::string pointer;       // JSON pointer in the manifest, for messages
+};
+
+struct BuildManifest {
+  std::string file;
+  std::string directory;  // of the manifest; relative paths in it are resolved against this
+  std::string preset;
+  int influences = 10;
+  std::string out;        // output root, resolved
+  std::vector<BuildCharacter> characters;
+};
+
+// Characters in an order where every muscles_from source comes before its dependents (ties: manifest
+// order). Throws Error MANIFEST_INVALID on an unknown or cyclic muscles_from, naming the pointer.
+std::vector<int> buildOrder(const BuildManifest& manifest);
+
+// The group of a character: the name of the character at the root of its muscles_from chain. A group
+// is built on one shard so that a retarget always finds its source.
+std::string buildGroup(const BuildManifest& manifest, int character);
+
+// Whether a character belongs to shard `index` of `count` (0 <= index < count): groups are sorted by
+// name and dealt round-robin, so the split is deterministic and every group lands on exactly one shard.
+bool inShard(const BuildManifest& manifest, int character, int index, int count);
+
+// Output paths of one character: OUT/NAME/NAME.glb, muscles.json, report.json, report.junit.xml,
+// report.html, and the incremental-build stamp.
+struct CharacterOutputs {
+  std::string directory, model, muscles, report_json, report_junit, report_html, stamp;
+};
+CharacterOutputs characterOutputs(const BuildManifest& manifest, const BuildCharacter& character);
+
+// A Ninja file: one edge per character (`rigbake build MANIFEST --character NAME`), with its input,
+// preset, muscle file and source character's muscles.json as inputs, and one edge for the summary.
+std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_command,
+                      const std::string& manifest_path);
+
+}  // namespace rigbake

@@ -1,0 +1,239 @@
+// The checks of `rigbake validate`: plain functions from a loaded baked character (plus its landmarks,
+// its muscle set and what formats/baked_gltf.h decoded from the file) to a Report of issues with stable
+// codes, a severity, a threshold and the measured value, in the manner of the Khronos glTF-Validator
+// (every check runs; none stops at the first problem). The report also carries the data its plots
+// draw. docs/validate.md lists every code with its default threshold.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "anatomy/character.h"
+#include "anatomy/landmarks.h"
+#include "anatomy/muscle_set.h"
+#include "pipeline/memory_table.h"
+#include "pipeline/pack_influences.h"
+
+namespace rigbake {
+
+enum class Severity { kError, kWarning, kInfo };
+enum class CheckStatus { kPass, kFail, kSkipped };
+// How the measured value must relate to the threshold for the check to pass.
+enum class Comparison { kAtMost, kAtLeast };
+
+const char* severityName(Severity severity);  // "error", "warning", "info"
+const char* statusName(CheckStatus status);   // "pass", "fail", "skipped"
+// False when `name` is not one of severityName()'s results.
+bool parseSeverity(const std::string& name, Severity* severity);
+
+// A check's code, what it measures and its defaults; the table docs/validate.md documents.
+struct CheckDefinition {
+  const char* code;
+  Severity severity;
+  double threshold;
+  Comparison comparison;
+  const char* unit;   // of threshold and measured value
+  const char* title;  // what it measures, one line
+};
+
+// Every check, in report order. Codes are never renamed or reused.
+const std::vector<CheckDefinition>& checkDefinitions();
+const CheckDefinition* findCheckDefinition(const std::string& code);  // nullptr when unknown
+
+// Per-code overrides from a `--config` file (formats/report_json.h reads it).
+struct ValidationConfig {
+  std::map<std::string, Severity> severity;
+  std::map<std::string, double> threshold;
+};
+
+// One offending (or, for a passing check, the worst) item of a check.
+struct CheckFinding {
+  std::string location;  // JSON pointer into the glTF, or a muscle / landmark name
+  double measured = 0.0;
+  std::string message;
+};
+
+struct CheckResult {
+  std::string code;
+  std::string title;
+  Severity severity = Severity::kError;
+  CheckStatus status = CheckStatus::kSkipped;
+  Comparison comparison = Comparison::kAtMost;
+  double threshold = 0.0;
+  std::string unit;
+  bool has_measured = false;
+  double measured = 0.0;   // the worst value over everything the check looked at
+  std::string location;    // where that worst value is
+  std::string message;     // a one-line summary, or why the check was skipped
+  std::vector<CheckFinding> findings;  // failing items first, worst first, at most kMaxFindings
+};
+
+constexpr int kMaxFindings = 20;
+
+// ---- What formats/baked_gltf.h decodes from the file, beyond the Character ----
+
+// A skinned primitive's influences exactly as the file stores them, with skin-local joint indices.
+struct FileSkinAttributes {
+  int mesh_part = -1;   // index into Character::meshes
+  std::string pointer;  // "/meshes/M/primitives/P"
+  int skin_joint_count = 0;
+  int slots = 0;                // 4 per JOINTS_n/WEIGHTS_n pair
+  std::vector<int> joints;      // every slot, zero-weight ones too: joints[v * slots + k]
+  std::vector<double> weights;  // as decoded (normalized integers mapped to [0, 1])
+  bool has_packed = false;      // the _RIGBAKE_PACKED_* carrier attributes were present and decodable
+  PackedInfluences packed;      // skin-local indices; joint_count = skin_joint_count
+};
+
+// A muscle joint node the bake added, from its extras {"rigbake": {...}}.
+struct FileMuscleNode {
+  int node = -1;
+  std::string name;
+  std::string muscle;  // e.g. LeftBicep
+  std::string role;    // base, tip, driver, skinned
+  std::string origin_joint;
+  std::string insertion_joint;
+  double compression = 0.0;
+  double stretch = 0.0;
+};
+
+struct FileIssue {
+  std::string pointer;
+  std::string message;
+};
+
+struct BakedFileData {
+  std::vector<FileSkinAttributes> skins;
+  std::vector<FileMuscleNode> muscle_nodes;
+  std::vector<FileIssue> structure;  // structural problems found while reading
+};
+
+// The Khronos glTF-Validator's verdict on the file, when it ran.
+struct ExternalValidation {
+  bool ran = false;
+  std::string skip_reason;
+  int errors = 0;
+  int warnings = 0;
+  std::vector<FileIssue> issues;  // "CODE: message" per issue, errors first
+};
+
+// ---- Plot data ----
+
+// Positions in the body's frame (anatomy/landmarks.h BodyFrame) relative to its midline: x towards the
+// character's left, y up, z forward. Front view draws (x, y), side view (z, y).
+struct FigureSegment {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();
+};
+
+struct FigureMuscle {
+  std::string name;   // LeftBicep
+  std::string group;  // Arms
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d driver = Eigen::Vector3d::Zero();
+  Eigen::Vector3d insertion = Eigen::Vector3d::Zero();
+  bool flagged = false;  // a locator of this muscle failed LOCATOR_NEAR_SURFACE or LOCATOR_SYMMETRY
+};
+
+struct FigureLandmark {
+  std::string name;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+
+// A silhouette as filled runs of a grid: cells [begin, end) of row `row`, row 0 at the bottom.
+struct Silhouette {
+  double min_u = 0.0, min_v = 0.0;  // body-frame coordinates of the grid's lower left corner
+  double cell = 0.0;                // cell size, scene units
+  int columns = 0, rows = 0;
+  std::vector<std::array<int, 3>> runs;  // {row, begin, end}
+};
+
+struct Figure {
+  double height = 0.0;  // body height, scene units
+  Silhouette front;     // (x, y)
+  Silhouette side;      // (z, y)
+  std::vector<FigureSegment> bones;
+  std::vector<FigureLandmark> landmarks;
+  std::vector<FigureMuscle> muscles;
+};
+
+struct MuscleRatioSeries {
+  std::string muscle;
+  std::string group;
+  double compression = 0.0;
+  double stretch = 0.0;
+  std::vector<double> ratio;  // unclamped L / L_rest at each of the clip's times
+};
+
+struct ClipRatios {
+  std::string clip;
+  std::vector<double> times;
+  std::vector<MuscleRatioSeries> muscles;
+};
+
+struct ClipDeformation {
+  std::string clip;
+  int samples = 0;
+  double max_displacement = 0.0;  // scene units
+  double rms_displacement = 0.0;
+};
+
+struct Report {
+  std::string character;  // file name without directories
+  int joints = 0;
+  int vertices = 0;       // skinned vertices
+  int muscles = 0;        // muscle parts checked (0 without --muscles)
+  int influences = 0;     // packed influence count of the bake, 0 when the file has no packed data
+  std::vector<CheckResult> checks;
+  Figure figure;
+  std::vector<ClipRatios> ratios;
+  std::vector<std::int64_t> influence_histogram;  // [n] = vertices with n non-zero influences
+  std::vector<ClipDeformation> deformation;
+  std::vector<SkinLayoutSize> memory;
+
+  // True when every check at error severity passed or was skipped.
+  bool passed() const;
+};
+
+// ---- Inputs and checks ----
+
+struct ValidationInputs {
+  std::string character_name;
+  const Character* character = nullptr;
+  const LandmarkSet* landmarks = nullptr;  // nullptr when they did not resolve
+  std::string landmark_problem;            // the resolver's message when they did not
+  const MuscleSet* muscles = nullptr;      // nullptr without --muscles
+  const BakedFileData* file = nullptr;
+  ExternalValidation khronos;
+};
+
+// Every check of checkDefinitions(), in that order, plus the plot data.
+Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationConfig& config);
+
+// The individual checks; each returns a result with the code's effective severity and threshold.
+CheckResult checkLandmarksResolved(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkLocatorSymmetry(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkLocatorNearSurface(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkMuscleRatioInRange(const ValidationInputs& inputs, const std::vector<ClipRatios>& ratios,
+                                    const ValidationConfig& config);
+CheckResult checkWeightsSum(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkWeightsNonNegative(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkJointIndexInRange(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkInfluenceCount(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const std::vector<ClipDeformation>& per_clip,
+                                        const ValidationConfig& config);
+CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkKhronosValidator(const ValidationInputs& inputs, const ValidationConfig& config);
+
+// Plot data (and inputs of the checks above that take them).
+std::vector<ClipRatios> muscleRatiosOverClips(const Character& character, const MuscleSet& muscles);
+std::vector<std::int64_t> influenceHistogram(const BakedFileData& file);
+// Skins every vertex with the packed weights and with the file's standard weights at every sample time
+// of every clip (the clip's key times) and measures the displacement between them.
+std::vector<ClipDeformation> packedDeformationPerClip(const Character& character, const BakedFileData& file);
+Figure bodyFigure(const Character& character, const LandmarkSet& landmarks, const MuscleSet* muscles);
+
+}  // namespace rigbake

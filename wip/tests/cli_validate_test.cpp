@@ -1,0 +1,185 @@
+// `rigbake validate` as CI runs it: sample -> place -> bake -> validate writes the three reports and
+// exits 0; a muscle file with a locator 1 m off makes it exit 4 with LOCATOR_NEAR_SURFACE failed in
+// every report; a bad config is exit 3 and writes nothing; the report is byte-identical across runs,
+// and Chromium renders it.
+#include "validate_fixture.h"
+
+using namespace rigbake;
+namespace ext = rigbake::test::external;
+using rigbake::test::countOccurrences;
+using rigbake::test::runCli;
+using rigbake::test::slurp;
+
+namespace {
+
+// The sample placed and baked by the CLI once per test process.
+struct CliBake {
+  std::string dir, glb, muscles;
+};
+
+const CliBake& cliBake() {
+  static const CliBake bake = [] {
+    CliBake b;
+    b.dir = test::validateScratchDir() + "/cli";
+    std::filesystem::create_directories(b.dir);
+    b.glb = b.dir + "/baked.glb";
+    b.muscles = b.dir + "/muscles.json";
+    const std::string sample = test::sampleGlbPathForCli();
+    REQUIRE(runCli("place " + ext::shellQuote(sample) + " -o " + ext::shellQuote(b.muscles)).exit_code == 0);
+    REQUIRE(runCli("bake " + ext::shellQuote(sample) + " --muscles " + ext::shellQuote(b.muscles) +
+                   " --influences 7 -o " + ext::shellQuote(b.glb))
+                .exit_code == 0);
+    return b;
+  }();
+  return bake;
+}
+
+nlohmann::json checkIn(const nlohmann::json& report, const std::string& code) {
+  for (const nlohmann::json& check : report["checks"]) {
+    if (check["code"] == code) return check;
+  }
+  FAIL("no " << code);
+  return {};
+}
+
+}  // namespace
+
+TEST_CASE("cli validate: a good bake passes, exit 0, with report.json, report.junit.xml and report.html") {
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  const std::string dir = out / "reports";
+  test::CliResult run = runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(bake.muscles) +
+                               " --report " + ext::shellQuote(dir) + " --json");
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir + "/report.json"));
+  CHECK(nlohmann::json::parse(run.out) == report);
+  CHECK(report["passed"] == true);
+  CHECK(report["character"] == "baked.glb");
+  CHECK(report["character_stats"]["packed_influences"] == 7);
+  CHECK(checkIn(report, "WEIGHTS_SUM")["measured"].get<double>() <= 0.001);
+  CHECK(checkIn(report, "MUSCLE_RATIO_IN_RANGE")["status"] == "pass");
+  CHECK(checkIn(report, "MUSCLE_RATIO_IN_RANGE")["measured"].get<double>() >= 0.0);
+  CHECK(checkIn(report, "INFLUENCE_COUNT")["measured"].get<double>() <= 7.0);
+  CHECK(checkIn(report, "KHRONOS_VALIDATOR")["status"] == "skipped");
+  CHECK(checkIn(report, "KHRONOS_VALIDATOR")["message"] == "not requested (pass --khronos)");
+  const std::string junit = slurp(dir + "/report.junit.xml");
+  CHECK(countOccurrences(junit, "<testcase ") == static_cast<int>(checkDefinitions().size()));
+  CHECK(countOccurrences(junit, "<failure ") == 0);
+  CHECK(slurp(dir + "/report.html").find("<span class=\"verdict pass\">PASS</span>") != std::string::npos);
+  CHECK(run.err.find("validated baked.glb: 11 checks, 0 errors") != std::string::npos);
+  // Only the three reports, no temporary files left beside them.
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.is_regular_file();
+  CHECK(files == 3);
+}
+
+TEST_CASE("cli validate: a muscle locator 1 m off fails LOCATOR_NEAR_SURFACE with exit code 4") {
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  nlohmann::json muscles = nlohmann::json::parse(slurp(bake.muscles));
+  const std::string moved = muscles["rigbake"]["muscles"].begin().key();
+  // The sample's joint frames are unscaled, so 1.0 in the attach joint's frame is 1 m.
+  muscles["rigbake"]["muscles"][moved]["origin"]["local"][1] =
+      muscles["rigbake"]["muscles"][moved]["origin"]["local"][1].get<double>() + 1.0;
+  const std::string edited = out / "edited.json";
+  std::ofstream(edited) << muscles.dump(2);
+  const std::string dir = out / "reports";
+  test::CliResult run =
+      runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(edited) + " --report " + ext::shellQuote(dir));
+  INFO(run.err);
+  CHECK(run.exit_code == 4);
+  CHECK(run.err.find("LOCATOR_NEAR_SURFACE " + moved + "/origin: error:") != std::string::npos);
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir + "/report.json"));
+  CHECK(report["passed"] == false);
+  const nlohmann::json surface = checkIn(report, "LOCATOR_NEAR_SURFACE");
+  CHECK(surface["status"] == "fail");
+  CHECK(surface["location"] == moved + "/origin");
+  CHECK(surface["measured"].get<double>() > surface["threshold"].get<double>());
+  const std::string junit = slurp(dir + "/report.junit.xml");
+  CHECK(countOccurrences(junit, "<failure ") == 1);
+  CHECK(junit.find("<failure type=\"LOCATOR_NEAR_SURFACE\"") != std::string::npos);
+  CHECK(slurp(dir + "/report.html").find("<span class=\"verdict fail\">FAIL</span>") != std::string::npos);
+}
+
+TEST_CASE("cli validate: without --muscles the muscle checks are skipped and the rest still run") {
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  test::CliResult run = runCli("validate " + ext::shellQuote(bake.glb) + " --report " + ext::shellQuote(out / "r"));
+  INFO(run.err);
+  CHECK(run.exit_code == 0);
+  const nlohmann::json report = nlohmann::json::parse(slurp(out / "r/report.json"));
+  CHECK(checkIn(report, "MUSCLE_RATIO_IN_RANGE")["status"] == "skipped");
+  CHECK(checkIn(report, "LOCATOR_NEAR_SURFACE")["status"] == "skipped");
+  CHECK(checkIn(report, "PACKED_DEFORMATION_ERROR")["status"] == "pass");
+  CHECK(checkIn(report, "GLTF_STRUCTURE")["status"] == "pass");
+}
+
+TEST_CASE("cli validate: --config overrides a threshold; a malformed config is exit 3 and writes nothing") {
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  const std::string config = out / "config.json";
+  std::ofstream(config) << R"({"checks": {"PACKED_DEFORMATION_ERROR": {"threshold": 0.0}}})";
+  test::CliResult strict = runCli("validate " + ext::shellQuote(bake.glb) + " --config " + ext::shellQuote(config) +
+                                  " --report " + ext::shellQuote(out / "strict"));
+  INFO(strict.err);
+  // 16-bit WEIGHTS_n and 0.001 packed weights differ by rounding, so a zero tolerance fails.
+  CHECK(strict.exit_code == 4);
+  CHECK(checkIn(nlohmann::json::parse(slurp(out / "strict/report.json")), "PACKED_DEFORMATION_ERROR")["status"] == "fail");
+
+  std::ofstream(config) << R"({"checks": {"PACKED_DEFORMATION_ERROR": {"limit": 0.0}}})";
+  test::CliResult bad = runCli("validate " + ext::shellQuote(bake.glb) + " --config " + ext::shellQuote(config) +
+                               " --report " + ext::shellQuote(out / "bad"));
+  CHECK(bad.exit_code == 3);
+  CHECK(bad.err.rfind("VALIDATE_CONFIG_INVALID " + config + "#/checks/PACKED_DEFORMATION_ERROR/limit: unknown key", 0) == 0);
+  CHECK(!std::filesystem::exists(out / "bad"));
+
+  test::CliResult missing = runCli("validate " + ext::shellQuote(out / "nope.glb") + " --report " + ext::shellQuote(out / "none"));
+  CHECK(missing.exit_code == 2);
+  CHECK(!std::filesystem::exists(out / "none"));
+}
+
+TEST_CASE("cli validate: two runs write byte-identical reports") {
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  for (const char* name : {"a", "b"}) {
+    REQUIRE(runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(bake.muscles) +
+                   " --report " + ext::shellQuote(out / name))
+                .exit_code == 0);
+  }
+  for (const char* file : {"report.json", "report.junit.xml", "report.html"}) {
+    INFO(file);
+    CHECK(slurp(out / (std::string("a/") + file)) == slurp(out / (std::string("b/") + file)));
+  }
+}
+
+TEST_CASE("cli validate: --khronos includes the Khronos glTF-Validator's verdict") {
+  if (!ext::requireTool(ext::validatorAvailable(), ext::validatorHint())) return;
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  test::CliResult run = runCli("validate " + ext::shellQuote(bake.glb) + " --khronos --report " + ext::shellQuote(out / "r"));
+  INFO(run.err);
+  CHECK(run.exit_code == 0);
+  const nlohmann::json khronos = checkIn(nlohmann::json::parse(slurp(out / "r/report.json")), "KHRONOS_VALIDATOR");
+  CHECK(khronos["status"] == "pass");
+  CHECK(khronos["measured"] == 0.0);
+  CHECK(khronos["message"].get<std::string>().rfind("0 errors, ", 0) == 0);
+}
+
+TEST_CASE("cli validate: Chromium renders the CLI's report.html with its plots and no errors") {
+  if (!ext::requireTool(!test::chromiumBinary().empty(), "chromium (apt-get install chromium)")) return;
+  const CliBake& bake = cliBake();
+  test::TempDir out;
+  REQUIRE(runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(bake.muscles) +
+                 " --report " + ext::shellQuote(out / "r"))
+              .exit_code == 0);
+  const test::ChromiumRun run = test::renderInChromium(out / "r/report.html");
+  INFO(run.log);
+  CHECK(run.exit_code == 0);
+  CHECK(countOccurrences(run.dom, "<svg class=\"view\"") == 2);
+  CHECK(countOccurrences(run.dom, "<svg class=\"chart ratio\"") >= 1);
+  CHECK(countOccurrences(run.dom, "<svg class=\"chart histogram\"") == 1);
+  CHECK(countOccurrences(run.dom, "<svg class=\"chart deformation\"") == 1);
+  CHECK(run.log.find("Uncaught") == std::string::npos);
+  CHECK(run.log.find("ERROR:CONSOLE") == std::string::npos);
+}

@@ -1,0 +1,172 @@
+// Bakes characters in-process the way `rigbake place` + `rigbake bake` do, writes the GLB and reads it
+// back the way `rigbake validate` does, for the check and report tests. Also runs headless Chromium on
+// a report page.
+#pragma once
+
+#include <tiny_gltf.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <regex>
+
+#include "anatomy_fixture.h"
+#include "cli_support.h"
+#include "external_tools.h"
+#include "formats/baked_gltf.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_write.h"
+#include "formats/muscle_json.h"
+#include "pipeline/bake.h"
+#include "pipeline/checks.h"
+
+namespace rigbake::test {
+
+// A baked file loaded back for validation, with everything validateBakedCharacter() needs.
+struct ValidatedBake {
+  std::string source;  // the character that was baked
+  std::string name;    // file name of the baked GLB
+  std::string glb;     // its path
+  std::string muscles_path;
+  LoadedCharacter loaded;
+  LandmarkSet landmarks;
+  MuscleSet muscles;  // read back against the baked skeleton, as --muscles does
+  BakedFileData file;
+  int clip_count = 0;
+
+  ValidationInputs inputs() const {
+    ValidationInputs in;
+    in.character_name = name;
+    in.character = &loaded.character;
+    in.landmarks = &landmarks;
+    in.muscles = &muscles;
+    in.file = &file;
+    in.khronos.skip_reason = "not requested";
+    return in;
+  }
+};
+
+inline std::string validateScratchDir() {
+  static const std::string dir = [] {
+    std::string pattern = (std::filesystem::temp_directory_path() / "rigbake-validate-XXXXXX").string();
+    return std::string(mkdtemp(pattern.data()));
+  }();
+  return dir;
+}
+
+// Writes the baked GLB and its muscle JSON into `dir`; returns the GLB path.
+inline std::string bakeToFiles(const std::string& path, int influences, const std::string& dir,
+                               std::string* muscles_path) {
+  Resolved resolved = resolveShipped(path);
+  LoadedCharacter loaded = loadCharacter(path);
+  MuscleSet muscles = placeMuscles(loaded.character, resolved.landmarks, gowPreset(), Sides::kBoth);
+  BakeOptions options;
+  options.influences = influences;
+  BakeResult bake = bakeCharacter(loaded.character, muscles, options);
+  const std::string stem = std::filesystem::path(path).stem().string() + "-" + std::to_string(influences);
+  const std::string glb = dir + "/" + stem + ".glb";
+  *muscles_path = dir + "/" + stem + "-muscles.json";
+  std::ofstream(glb, std::ios::binary) << serializeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), true);
+  std::ofstream(*muscles_path, std::ios::binary) << muscleJson(muscles, loaded.character.skeleton, "gow_biped");
+  return glb;
+}
+
+inline std::shared_ptr<ValidatedBake> loadValidatedBake(const std::string& glb, const std::string& muscles_path,
+                                                        const std::string& source) {
+  auto baked = std::make_shared<ValidatedBake>();
+  baked->source = source;
+  baked->name = std::filesystem::path(glb).filename().string();
+  baked->glb = glb;
+  baked->muscles_path = muscles_path;
+  Resolved resolved = resolveShipped(glb);
+  baked->loaded = loadCharacter(glb);
+  baked->landmarks = resolved.landmarks;
+  baked->muscles = readMuscleJson(muscles_path, baked->loaded.character, baked->landmarks, gowPreset());
+  baked->file = readBakedFileData(baked->loaded);
+  baked->clip_count = static_cast<int>(baked->loaded.character.clips.size());
+  return baked;
+}
+
+inline std::vector<std::string> validateCharacterPaths() {
+  std::vector<std::string> paths = {sampleGlbPath()};
+  for (const std::string& name : sharedAssetNames()) {
+    std::string path = requireAsset(name);
+    if (!path.empty()) paths.push_back(path);
+  }
+  return paths;
+}
+
+// The sample and every shared asset baked at 10 influences, once per test process.
+inline const std::vector<std::shared_ptr<ValidatedBake>>& validatedBakes() {
+  static const std::vector<std::shared_ptr<ValidatedBake>> all = [] {
+    std::vector<std::shared_ptr<ValidatedBake>> result;
+    for (const std::string& path : validateCharacterPaths()) {
+      std::string muscles;
+      std::string glb = bakeToFiles(path, 10, validateScratchDir(), &muscles);
+      result.push_back(loadValidatedBake(glb, muscles, path));
+    }
+    return result;
+  }();
+  return all;
+}
+
+inline const ValidatedBake& validatedSample() { return *validatedBakes().front(); }
+
+inline const CheckResult& checkOf(const Report& report, const std::string& code) {
+  for (const CheckResult& check : report.checks) {
+    if (check.code == code) return check;
+  }
+  FAIL("no check " << code << " in the report");
+  return report.checks.front();
+}
+
+// ---- Headless Chromium ----
+
+inline std::string chromiumBinary() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    if (external::onPath(name)) return name;
+  }
+  return "";
+}
+
+struct ChromiumRun {
+  int exit_code = -1;
+  std::string dom;  // --dump-dom output
+  std::string log;  // stderr with --enable-logging=stderr
+};
+
+// Renders `html_path` headless with a fresh profile and no network services; dumps the DOM (and a
+// screenshot when `screenshot` is not empty).
+inline ChromiumRun renderInChromium(const std::string& html_path, const std::string& screenshot = "") {
+  external::ScratchDir profile;
+  const std::string flags =
+      " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run --disable-background-networking"
+      " --disable-component-update --disable-sync --disable-dev-shm-usage --enable-logging=stderr --v=0"
+      " --user-data-dir=" + external::shellQuote(profile.path());
+  const std::string url = external::shellQuote("file://" + std::filesystem::absolute(html_path).string());
+  ChromiumRun run;
+  const std::string log_file = profile.file("stderr.log");
+  external::CommandResult dump =
+      external::runCommand(chromiumBinary() + flags + " --dump-dom " + url + " 2>" + external::shellQuote(log_file));
+  run.exit_code = dump.exit_code;
+  run.dom = dump.output;
+  run.log = slurp(log_file);
+  if (!screenshot.empty()) {
+    external::ScratchDir profile2;
+    external::runCommand(chromiumBinary() + " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
+                         " --disable-background-networking --disable-component-update --disable-sync"
+                         " --disable-dev-shm-usage --hide-scrollbars --window-size=1320,2600 --user-data-dir=" +
+                         external::shellQuote(profile2.path()) + " --screenshot=" + external::shellQuote(screenshot) +
+                         " " + url + " 2>&1");
+  }
+  return run;
+}
+
+inline int countOccurrences(const std::string& text, const std::string& needle) {
+  int count = 0;
+  for (size_t at = text.find(needle); at != std::string::npos; at = text.find(needle, at + needle.size())) ++count;
+  return count;
+}
+
+}  // namespace rigbake::test
