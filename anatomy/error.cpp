@@ -18,6 +18,14 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"PRESET_LANDMARK_UNKNOWN", ExitCode::kInvalidInput, "A preset or naming map names a landmark that is not canonical."},
       {"MUSCLES_INVALID", ExitCode::kInvalidInput, "A muscle JSON file breaks the muscle schema."},
       {"MUSCLES_MISMATCH", ExitCode::kInvalidInput, "A muscle JSON file names joints that the character does not have."},
+      {"JIGGLE_UNRESOLVED", ExitCode::kInvalidInput, "A jiggle preset names a joint, landmark or muscle the character does not have, or an unusable axis."},
+      {"HITS_INVALID", ExitCode::kInvalidInput, "A hit file (--hits) breaks its schema or names a part that has no jiggle."},
+      {"PACKED_FILE_INVALID", ExitCode::kInvalidInput, "A packed influence file (--packed-out) is damaged or not layout version 1."},
+      {"MANIFEST_INVALID", ExitCode::kInvalidInput, "A build manifest breaks its schema or names an unknown muscles_from character."},
+      {"BUILD_FAILED", ExitCode::kChecksFailed, "rigbake build finished, but at least one character failed; each is named in the summary."},
+      {"VALIDATE_CONFIG_INVALID", ExitCode::kInvalidInput, "A `rigbake validate --config` file breaks its format; the message gives the JSON pointer."},
+      {"RETARGET_LOCATOR_UNANCHORED", ExitCode::kInvalidInput, "A muscle locator rides on a joint with no canonical landmark on it or above it, so it cannot be retargeted."},
+      {"RETARGET_SEGMENT_DEGENERATE", ExitCode::kInvalidInput, "Two landmarks that span a retarget frame coincide, so the segment has no direction."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

@@ -15,7 +15,7 @@ enum class ExitCode : int {
   kUsage = 1,
   kIo = 2,
   kInvalidInput = 3,
-  kValidationFailed = 4,
+  kChecksFailed = 1,  // validate: an error-severity check failed; build: a character failed (CI treats it as a failed test)
   kInternal = 5,
 };
 

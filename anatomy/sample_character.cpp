@@ -22,7 +22,6 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
-#include <map>
 
 #include "anatomy/error.h"
 

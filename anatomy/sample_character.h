@@ -41,8 +41,9 @@ struct SampleJoint {
 };
 
 // One skinned triangle mesh. Positions and normals are in the bind pose, world space (the mesh node
-// has no transform). Weights are floats because that is how glTF stores them: each vertex's four
-// floats add up to exactly 1.0f, so nothing downstream has to renormalise.
+// has no transform). Weights are floats because that is how glTF stores them; the largest weight of
+// each vertex takes what the others leave, so the four floats sum to 1 within float rounding and
+// nothing downstream has to renormalise.
 struct SampleMesh {
   std::vector<Eigen::Vector3d> positions;
   std::vector<Eigen::Vector3d> normals;

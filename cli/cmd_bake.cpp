@@ -1,18 +1,22 @@
 // `rigbake bake CHAR --muscles muscles.json -o baked.glb`: muscle joints, their animation and skin
 // weights into a new glTF, with the deformation error and memory figures of the chosen influence count.
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "anatomy/error.h"
 #include "anatomy/placement.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_bake.h"
 #include "formats/gltf_write.h"
+#include "formats/jiggle_json.h"
 #include "formats/muscle_json.h"
 #include "formats/packed_file.h"
+#include "formats/vrm_spring.h"
 #include "pipeline/bake.h"
 #include "pipeline/memory_table.h"
 
@@ -26,6 +30,8 @@ struct BakeCommandOptions {
   std::string output;
   std::string packed_output;
   std::string stats_output;
+  std::string jiggle;
+  std::string hits;
   int influences = 4;
   double fps = 0.0;
   bool json = false;
@@ -72,6 +78,30 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const MuscleSet& mus
   };
 }
 
+// A jiggle preset by file path, or by name under presets/jiggle/.
+JigglePreset loadJigglePreset(const PresetOptions& presets, const std::string& name_or_path) {
+  if (std::ifstream(name_or_path).good()) return readJigglePreset(name_or_path);
+  const std::string shipped = presetsDirectory(presets) + "/jiggle/" + name_or_path + ".json";
+  if (name_or_path.find('/') == std::string::npos && std::ifstream(shipped).good()) return readJigglePreset(shipped);
+  return readJigglePreset(name_or_path);  // throws IO_FILE_NOT_FOUND naming the path as given
+}
+
+bool isVrm(const tinygltf::Model& model) {
+  return model.extensions.count("VRMC_vrm") > 0 || model.extensions.count("VRM") > 0;
+}
+
+// VRM runtimes simulate spring bones live; the baked channels stay for every other glTF player.
+void addSpringBones(tinygltf::Model* model, const Character& character, const BakeOptions& options,
+                    const BakeResult& bake, int first_muscle_node) {
+  std::vector<VrmSpring> springs = vrmSpringsForSkeleton(character.skeleton, options.jiggles);
+  for (const JiggleSetup& setup : options.jiggles) {
+    if (setup.host != JiggleHost::kMuscle) continue;
+    const int joint = bake.skinned_joint_of_muscle[setup.muscle];
+    springs.push_back(vrmSpringFor(setup, first_muscle_node + joint, bake.joints[joint].rest_local.scale));
+  }
+  addVrmSpringBones(model, springs);
+}
+
 int run(const BakeCommandOptions& options) {
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
@@ -82,12 +112,21 @@ int run(const BakeCommandOptions& options) {
   BakeOptions bake_options;
   bake_options.influences = options.influences;
   bake_options.fps = options.fps;
+  if (!options.jiggle.empty()) {
+    bake_options.jiggles =
+        resolveJiggles(loadJigglePreset(options.presets, options.jiggle), character.skeleton, &resolved.landmarks, &muscles);
+  } else if (!options.hits.empty()) {
+    fail("USAGE", "--hits", "needs --jiggle: hits kick jiggle joints");
+  }
+  if (!options.hits.empty()) bake_options.hits = readHits(options.hits);
   BakeResult bake = bakeCharacter(character, muscles, bake_options);
   nlohmann::json stats = statsJson(options, muscles, bake);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
-  std::string model_bytes = serializeGltf(bakedModel(*resolved.loaded.document, character, muscles, bake),
-                                          isBinaryGltfPath(options.output));
+  tinygltf::Model model = bakedModel(*resolved.loaded.document, character, muscles, bake);
+  const bool vrm_springs = !bake_options.jiggles.empty() && isVrm(model);
+  if (vrm_springs) addSpringBones(&model, character, bake_options, bake, static_cast<int>(model.nodes.size() - bake.joints.size()));
+  std::string model_bytes = serializeGltf(model, isBinaryGltfPath(options.output));
   std::vector<PackedInfluences> packed;
   for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
   writeFileAtomically(options.output, model_bytes);
@@ -102,6 +141,10 @@ int run(const BakeCommandOptions& options) {
             << stats["deformation_error_mm"]["rms"].get<double>() << " mm; skin data "
             << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
             << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
+  if (!bake_options.jiggles.empty()) {
+    std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()
+              << " hits, baked into every clip" << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
+  }
   return 0;
 }
 
@@ -129,6 +172,11 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->capture_default_str();
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
   command->add_option("--stats", options->stats_output, "Write figures (deformation error, bytes per vertex) as JSON");
+  command->add_option("--jiggle", options->jiggle,
+                      "Jiggle preset (a file, or a name under presets/jiggle/, e.g. biceps): spring joints with cone "
+                      "limits simulated on a fixed 240 Hz step and baked into every clip; on a VRM also exported as "
+                      "spring bones (docs/jiggle.md)");
+  command->add_option("--hits", options->hits, "Hit reactions (JSON, docs/jiggle.md) that kick the jiggle joints");
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print the figures as JSON on stdout");
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

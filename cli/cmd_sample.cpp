@@ -1,11 +1,9 @@
 // `rigbake sample`: writes the procedural mannequin (anatomy/sample_character.h) as GLB, glTF or VRM.
-#include <tiny_gltf.h>
-
 #include <iostream>
+#include <memory>
 
 #include "anatomy/sample_character.h"
 #include "cli/commands.h"
-#include "formats/gltf_write.h"
 #include "formats/sample_gltf.h"
 
 namespace rigbake::cli {
@@ -23,7 +21,7 @@ int runSample(const SampleCommandOptions& options) {
   sample.target_vertices = options.vertices;
   sample.vrm = options.vrm == 0 ? SampleVrm::kVrm0 : options.vrm == 1 ? SampleVrm::kVrm1 : SampleVrm::kNone;
   SampleCharacter character = makeSampleCharacter(sample);
-  writeGltf(sampleToGltf(character), options.output);
+  writeSampleGltf(character, options.output);
   std::cout << "wrote " << options.output << ": " << character.joints.size() << " joints, "
             << character.mesh.positions.size() << " vertices, " << character.mesh.triangles.size() << " triangles, "
             << character.clips.size() << " clips\n";

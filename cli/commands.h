@@ -15,5 +15,8 @@ void addLandmarksCommand(CLI::App& app, Runner* runner);
 void addPlaceCommand(CLI::App& app, Runner* runner);
 void addBakeCommand(CLI::App& app, Runner* runner);
 void addErrorsCommand(CLI::App& app, Runner* runner);
+void addValidateCommand(CLI::App& app, Runner* runner);
+void addRetargetCommand(CLI::App& app, Runner* runner);
+void addBuildCommand(CLI::App& app, Runner* runner);
 
 }  // namespace rigbake::cli

@@ -23,6 +23,9 @@ int main(int argc, char** argv) {
   rigbake::cli::addPlaceCommand(app, &runner);
   rigbake::cli::addBakeCommand(app, &runner);
   rigbake::cli::addErrorsCommand(app, &runner);
+  rigbake::cli::addValidateCommand(app, &runner);
+  rigbake::cli::addRetargetCommand(app, &runner);
+  rigbake::cli::addBuildCommand(app, &runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -7,63 +7,10 @@
 #include <set>
 
 #include "anatomy/error.h"
+#include "formats/gltf_buffer.h"
 
 namespace rigbake {
 namespace {
-
-// New binary data goes into one extra buffer; writeGltf merges every buffer into the GLB's one.
-class BufferAppender {
- public:
-  explicit BufferAppender(tinygltf::Model* model) : model_(model) {
-    buffer_ = static_cast<int>(model->buffers.size());
-    model->buffers.emplace_back();
-  }
-
-  int addAccessor(const void* data, size_t bytes, int component_type, int type, int count, bool normalized,
-                  int target, const std::vector<double>& min = {}, const std::vector<double>& max = {}) {
-    std::vector<unsigned char>& buffer = model_->buffers[buffer_].data;
-    while (buffer.size() % 4 != 0) buffer.push_back(0);
-    tinygltf::BufferView view;
-    view.buffer = buffer_;
-    view.byteOffset = buffer.size();
-    view.byteLength = bytes;
-    view.target = target;
-    const unsigned char* begin = static_cast<const unsigned char*>(data);
-    buffer.insert(buffer.end(), begin, begin + bytes);
-    model_->bufferViews.push_back(view);
-    tinygltf::Accessor accessor;
-    accessor.bufferView = static_cast<int>(model_->bufferViews.size()) - 1;
-    accessor.componentType = component_type;
-    accessor.type = type;
-    accessor.count = count;
-    accessor.normalized = normalized;
-    accessor.minValues = min;
-    accessor.maxValues = max;
-    model_->accessors.push_back(accessor);
-    return static_cast<int>(model_->accessors.size()) - 1;
-  }
-
-  int addFloats(const std::vector<float>& values, int type, int components, bool with_bounds = false) {
-    std::vector<double> min, max;
-    const int count = static_cast<int>(values.size()) / components;
-    if (with_bounds) {
-      min.assign(components, std::numeric_limits<double>::max());
-      max.assign(components, std::numeric_limits<double>::lowest());
-      for (int i = 0; i < count; ++i) {
-        for (int c = 0; c < components; ++c) {
-          min[c] = std::min(min[c], static_cast<double>(values[i * components + c]));
-          max[c] = std::max(max[c], static_cast<double>(values[i * components + c]));
-        }
-      }
-    }
-    return addAccessor(values.data(), values.size() * sizeof(float), TINYGLTF_COMPONENT_TYPE_FLOAT, type, count, false, 0,
-                       min, max);
-  }
-
- private:
-  tinygltf::Model* model_;
-  int buffer_ = -1;
-};
 
 int gltfType(const std::string& type) {
   if (type == "SCALAR") return TINYGLTF_TYPE_SCALAR;
@@ -80,13 +27,92 @@ void appendMatrix(std::vector<float>* out, const Eigen::Matrix4d& m) {
     for (int r = 0; r < 4; ++r) out->push_back(static_cast<float>(m(r, c)));
 }
 
+struct TrsKeys {
+  std::vector<float> translations, rotations, scales;
+};
+
+TrsKeys trsKeys(const std::vector<Trs>& keys) {
+  TrsKeys out;
+  Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
+  for (size_t t = 0; t < keys.size(); ++t) {
+    Eigen::Quaterniond q = keys[t].rotation.normalized();
+    // Keep consecutive keys in one hemisphere so that interpolation takes the short way.
+    if (t > 0 && q.dot(previous) < 0) q.coeffs() = -q.coeffs();
+    previous = q;
+    for (int c = 0; c < 3; ++c) out.translations.push_back(static_cast<float>(keys[t].translation[c]));
+    for (double c : quat(q)) out.rotations.push_back(static_cast<float>(c));
+    for (int c = 0; c < 3; ++c) out.scales.push_back(static_cast<float>(keys[t].scale[c]));
+  }
+  return out;
+}
+
+tinygltf::Value numbers(const std::vector<double>& values) {
+  tinygltf::Value::Array array;
+  for (double v : values) array.push_back(tinygltf::Value(v));
+  return tinygltf::Value(array);
+}
+
+// A skeleton joint's jiggle replaces that joint's channels in the clip: an existing channel's sampler
+// is pointed at the jiggled keys (so no sampler is left unused), a missing path gets a new channel.
+// The jiggle angles go into the animation's extras for the validation report's plots, since the
+// animated (un-jiggled) direction they are measured from is no longer in the file.
+void writeJiggles(const BakedClip& clip, const Skeleton& skeleton, int input, GltfBufferAppender* data,
+                  tinygltf::Animation* animation) {
+  if (clip.jiggles.empty()) return;
+  tinygltf::Value::Array report;
+  for (const JiggleTrack& track : clip.jiggles) {
+    if (track.host == JiggleHost::kSkeletonJoint) {
+      const int node = skeleton.nodes[track.joint];
+      const TrsKeys keys = trsKeys(track.local);
+      const std::pair<const char*, const std::vector<float>*> paths[] = {
+          {"translation", &keys.translations}, {"rotation", &keys.rotations}, {"scale", &keys.scales}};
+      for (const auto& [path, values] : paths) {
+        const bool rotation = std::string(path) == "rotation";
+        const int output = data->addFloats(*values, rotation ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, rotation ? 4 : 3);
+        bool replaced = false;
+        for (tinygltf::AnimationChannel& channel : animation->channels) {
+          if (channel.target_node != node || channel.target_path != path) continue;
+          tinygltf::AnimationSampler& sampler = animation->samplers[channel.sampler];
+          sampler.input = input;
+          sampler.output = output;
+          sampler.interpolation = "LINEAR";
+          replaced = true;
+        }
+        if (replaced) continue;
+        tinygltf::AnimationSampler sampler;
+        sampler.input = input;
+        sampler.output = output;
+        sampler.interpolation = "LINEAR";
+        animation->samplers.push_back(sampler);
+        tinygltf::AnimationChannel channel;
+        channel.sampler = static_cast<int>(animation->samplers.size()) - 1;
+        channel.target_node = node;
+        channel.target_path = path;
+        animation->channels.push_back(channel);
+      }
+    }
+    tinygltf::Value::Object entry;
+    entry["joint"] = tinygltf::Value(track.name);
+    entry["host"] = tinygltf::Value(std::string(track.host == JiggleHost::kMuscle ? "muscle" : "joint"));
+    entry["angle_deg"] = numbers(track.angle_deg);
+    entry["clamp_deg"] = numbers(track.clamp_deg);
+    report.push_back(tinygltf::Value(entry));
+  }
+  tinygltf::Value::Object extras = animation->extras.IsObject() ? animation->extras.Get<tinygltf::Value::Object>()
+                                                                 : tinygltf::Value::Object{};
+  tinygltf::Value::Object rigbake;
+  rigbake["jiggle"] = tinygltf::Value(report);
+  extras["rigbake"] = tinygltf::Value(rigbake);
+  animation->extras = tinygltf::Value(extras);
+}
+
 }  // namespace
 
 tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const MuscleSet& muscles,
                            const BakeResult& bake) {
   tinygltf::Model model = modelOf(document);
   const Skeleton& skeleton = character.skeleton;
-  BufferAppender data(&model);
+  GltfBufferAppender data(&model);
 
   // Joint nodes, children of their attach joints.
   const int first_node = static_cast<int>(model.nodes.size());
@@ -167,18 +193,12 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     const int input = data.addFloats(times, TINYGLTF_TYPE_SCALAR, 1, true);
     for (size_t k = 0; k < bake.joints.size(); ++k) {
       const BakedJoint& joint = bake.joints[k];
-      std::vector<float> translations, rotations, scales;
-      Eigen::Quaterniond previous = Eigen::Quaterniond::Identity();
-      for (size_t t = 0; t < clip.times.size(); ++t) {
-        const Trs& trs = clip.local[t][k];
-        Eigen::Quaterniond q = trs.rotation.normalized();
-        // Keep consecutive keys in one hemisphere so that interpolation takes the short way.
-        if (t > 0 && q.dot(previous) < 0) q.coeffs() = -q.coeffs();
-        previous = q;
-        for (int c = 0; c < 3; ++c) translations.push_back(static_cast<float>(trs.translation[c]));
-        for (double c : quat(q)) rotations.push_back(static_cast<float>(c));
-        for (int c = 0; c < 3; ++c) scales.push_back(static_cast<float>(trs.scale[c]));
-      }
+      std::vector<Trs> keys;
+      for (size_t t = 0; t < clip.times.size(); ++t) keys.push_back(clip.local[t][k]);
+      const TrsKeys trs_keys = trsKeys(keys);
+      const std::vector<float>& translations = trs_keys.translations;
+      const std::vector<float>& rotations = trs_keys.rotations;
+      const std::vector<float>& scales = trs_keys.scales;
       auto addChannel = [&](const std::vector<float>& values, int type, int components, const char* path) {
         tinygltf::AnimationSampler sampler;
         sampler.input = input;
@@ -195,6 +215,7 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
       addChannel(rotations, TINYGLTF_TYPE_VEC4, 4, "rotation");
       if (joint.role == MuscleJointRole::kSkinned) addChannel(scales, TINYGLTF_TYPE_VEC3, 3, "scale");
     }
+    writeJiggles(clip, skeleton, input, &data, &animation);
   }
   return model;
 }

@@ -10,88 +10,17 @@
 
 #include <tiny_gltf.h>
 
-#include <cstring>
+#include <algorithm>
 #include <limits>
 #include <nlohmann/json.hpp>
+
+#include "formats/gltf_buffer.h"
+#include "formats/gltf_json_value.h"
+#include "formats/gltf_write.h"
 
 namespace rigbake {
 
 namespace {
-
-class BufferBuilder {
- public:
-  explicit BufferBuilder(tinygltf::Model* model) : model_(model) {}
-
-  // Returns the accessor index. `min`/`max` are written when non-empty.
-  template <typename T>
-  int add(const std::vector<T>& values, int component_type, int type, size_t count, int target,
-          const std::vector<double>& min = {}, const std::vector<double>& max = {}) {
-    while (bytes_.size() % 4 != 0) bytes_.push_back(0);
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = bytes_.size();
-    view.byteLength = values.size() * sizeof(T);
-    view.target = target;
-    const unsigned char* raw = reinterpret_cast<const unsigned char*>(values.data());
-    bytes_.insert(bytes_.end(), raw, raw + view.byteLength);
-    model_->bufferViews.push_back(view);
-    tinygltf::Accessor accessor;
-    accessor.bufferView = static_cast<int>(model_->bufferViews.size()) - 1;
-    accessor.componentType = component_type;
-    accessor.type = type;
-    accessor.count = count;
-    accessor.minValues = min;
-    accessor.maxValues = max;
-    model_->accessors.push_back(accessor);
-    return static_cast<int>(model_->accessors.size()) - 1;
-  }
-
-  void finish() {
-    tinygltf::Buffer buffer;
-    buffer.data = std::move(bytes_);
-    model_->buffers.push_back(std::move(buffer));
-  }
-
- private:
-  tinygltf::Model* model_;
-  std::vector<unsigned char> bytes_;
-};
-
-// Component-wise bounds of float data, as the spec wants them: of the stored floats.
-void bounds(const std::vector<float>& values, int width, std::vector<double>* min, std::vector<double>* max) {
-  min->assign(width, std::numeric_limits<double>::infinity());
-  max->assign(width, -std::numeric_limits<double>::infinity());
-  for (size_t i = 0; i < values.size(); ++i) {
-    (*min)[i % width] = std::min((*min)[i % width], static_cast<double>(values[i]));
-    (*max)[i % width] = std::max((*max)[i % width], static_cast<double>(values[i]));
-  }
-}
-
-tinygltf::Value toValue(const nlohmann::json& json) {
-  switch (json.type()) {
-    case nlohmann::json::value_t::boolean:
-      return tinygltf::Value(json.get<bool>());
-    case nlohmann::json::value_t::number_integer:
-    case nlohmann::json::value_t::number_unsigned:
-      return tinygltf::Value(json.get<int>());
-    case nlohmann::json::value_t::number_float:
-      return tinygltf::Value(json.get<double>());
-    case nlohmann::json::value_t::string:
-      return tinygltf::Value(json.get<std::string>());
-    case nlohmann::json::value_t::array: {
-      tinygltf::Value::Array array;
-      for (const auto& item : json) array.push_back(toValue(item));
-      return tinygltf::Value(std::move(array));
-    }
-    case nlohmann::json::value_t::object: {
-      tinygltf::Value::Object object;
-      for (const auto& [key, item] : json.items()) object[key] = toValue(item);
-      return tinygltf::Value(std::move(object));
-    }
-    default:
-      return tinygltf::Value();
-  }
-}
 
 constexpr const char* kGenerator = "rigbake " RIGBAKE_VERSION;
 
@@ -180,7 +109,7 @@ tinygltf::Model sampleToGltf(const SampleCharacter& character) {
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = kGenerator;
-  BufferBuilder buffer(&model);
+  GltfBufferAppender buffer(&model);
   const int joint_count = static_cast<int>(character.joints.size());
   const SampleMesh& mesh = character.mesh;
   const size_t vertex_count = mesh.positions.size();
@@ -213,7 +142,7 @@ tinygltf::Model sampleToGltf(const SampleCharacter& character) {
     for (int k = 0; k < 4; ++k) weights.push_back(mesh.weights[v][k]);
   }
   std::vector<double> min, max;
-  bounds(positions, 3, &min, &max);
+  floatBounds(positions, 3, &min, &max);
   tinygltf::Primitive primitive;
   primitive.mode = TINYGLTF_MODE_TRIANGLES;
   primitive.material = 0;
@@ -295,7 +224,7 @@ tinygltf::Model sampleToGltf(const SampleCharacter& character) {
       if (input < 0 || track.times != input_times) {
         std::vector<float> times(track.times.begin(), track.times.end());
         std::vector<double> t_min, t_max;
-        bounds(times, 1, &t_min, &t_max);
+        floatBounds(times, 1, &t_min, &t_max);
         input = buffer.add(times, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, times.size(), 0, t_min, t_max);
         input_times = track.times;
       }
@@ -317,7 +246,6 @@ tinygltf::Model sampleToGltf(const SampleCharacter& character) {
     }
     model.animations.push_back(animation);
   }
-  buffer.finish();
 
   tinygltf::Scene scene;
   scene.name = "Scene";
@@ -328,12 +256,16 @@ tinygltf::Model sampleToGltf(const SampleCharacter& character) {
 
   if (character.vrm == SampleVrm::kVrm0) {
     model.extensionsUsed.push_back("VRM");
-    model.extensions["VRM"] = toValue(vrm0Extension(character, 0));
+    model.extensions["VRM"] = toGltfValue(vrm0Extension(character, 0));
   } else if (character.vrm == SampleVrm::kVrm1) {
     model.extensionsUsed.push_back("VRMC_vrm");
-    model.extensions["VRMC_vrm"] = toValue(vrm1Extension(character));
+    model.extensions["VRMC_vrm"] = toGltfValue(vrm1Extension(character));
   }
   return model;
+}
+
+void writeSampleGltf(const SampleCharacter& character, const std::string& path) {
+  writeGltf(sampleToGltf(character), path);
 }
 
 }  // namespace rigbake

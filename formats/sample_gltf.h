@@ -3,6 +3,8 @@
 // ("VRM") or VRM 1.0 ("VRMC_vrm") extension that maps humanoid bones to nodes.
 #pragma once
 
+#include <string>
+
 #include "anatomy/sample_character.h"
 
 namespace tinygltf {
@@ -12,5 +14,8 @@ class Model;
 namespace rigbake {
 
 tinygltf::Model sampleToGltf(const SampleCharacter& character);
+
+// sampleToGltf, then formats/gltf_write's writeGltf (GLB for .glb/.vrm, JSON glTF otherwise).
+void writeSampleGltf(const SampleCharacter& character, const std::string& path);
 
 }  // namespace rigbake

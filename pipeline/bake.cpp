@@ -1,6 +1,7 @@
 #include "pipeline/bake.h"
 
 #include <cassert>
+#include <chrono>
 
 #include "anatomy/error.h"
 #include "formats/surface_graph.h"
@@ -49,6 +50,52 @@ Trs localTrs(const Eigen::Affine3d& world, const Pose& pose, int parent) {
   return decomposeTrs(pose.world[parent].inverse() * world);
 }
 
+// A muscle jiggle follows the muscle's skinned joint as the muscle model moves it, so its frames are
+// the evaluated muscle at every frame time the fixed-step simulation asks for.
+JiggleTrack simulateMuscleJiggle(const JiggleSetup& setup, const MuscleSet& muscles, const Skeleton& skeleton,
+                                 const Clip& clip, const std::vector<double>& times, const std::vector<HitImpulse>& hits) {
+  const MusclePart& part = muscles.parts[setup.muscle];
+  const std::vector<double> frame_times = jiggleFrameTimes(times);
+  std::vector<JiggleFrame> frames;
+  frames.reserve(frame_times.size());
+  for (double time : frame_times) {
+    const Pose pose = sampleClip(skeleton, clip, time);
+    JiggleFrame frame;
+    frame.parent = pose.world[parentOf(part, MuscleJointRole::kSkinned)];
+    frame.root = pose.world[setup.root >= 0 ? setup.root : part.origin.joint];
+    frame.pivot = evaluateMuscle(part, skeleton, pose).skinned;
+    frames.push_back(frame);
+  }
+  return simulateJiggleFrames(setup, times, frame_times, frames, hits, clip.name);
+}
+
+// Every jiggle of one clip, in setup order; a muscle jiggle's track also replaces its skinned joint's
+// samples (and skin matrices) so the file and the deformation figures see the jiggled joint.
+std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& muscles, const Clip& clip,
+                                     const BakeOptions& options, const BakeResult& result, BakedClip* baked,
+                                     std::vector<SkinFrame>* frames) {
+  std::vector<JiggleTrack> skeleton_tracks = simulateJiggle(skeleton, clip, baked->times, options.jiggles, options.hits);
+  std::vector<JiggleTrack> tracks;
+  size_t next_skeleton_track = 0;
+  for (const JiggleSetup& setup : options.jiggles) {
+    if (setup.host == JiggleHost::kSkeletonJoint) {
+      tracks.push_back(std::move(skeleton_tracks[next_skeleton_track++]));
+      continue;
+    }
+    JiggleTrack track = simulateMuscleJiggle(setup, muscles, skeleton, clip, baked->times, options.hits);
+    const int joint = result.skinned_joint_of_muscle[setup.muscle];
+    const MusclePart& part = muscles.parts[setup.muscle];
+    for (size_t t = 0; t < baked->times.size(); ++t) {
+      baked->local[t][joint] = track.local[t];
+      const Pose pose = sampleClip(skeleton, clip, baked->times[t]);
+      const Eigen::Affine3d world = pose.world[parentOf(part, MuscleJointRole::kSkinned)] * track.local[t].matrix();
+      (*frames)[t][skeleton.size() + setup.muscle] = world * result.joints[joint].bind_world.inverse();
+    }
+    tracks.push_back(std::move(track));
+  }
+  return tracks;
+}
+
 InfluenceSet normalized(const InfluenceSet& set) {
   InfluenceSet out = set;
   for (int v = 0; v < set.vertexCount(); ++v) {
@@ -61,7 +108,17 @@ InfluenceSet normalized(const InfluenceSet& set) {
 
 }  // namespace
 
-BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options) {
+BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options,
+                         BakeTimings* timings) {
+  BakeTimings ignored;
+  BakeTimings& timing = timings ? *timings : ignored;
+  auto stopwatch = std::chrono::steady_clock::now();
+  auto lap = [&stopwatch]() {
+    auto now = std::chrono::steady_clock::now();
+    double seconds = std::chrono::duration<double>(now - stopwatch).count();
+    stopwatch = now;
+    return seconds;
+  };
   const Skeleton& skeleton = character.skeleton;
   if (!isPackedInfluenceCount(options.influences))
     fail("USAGE", "--influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
@@ -70,6 +127,13 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail("MUSCLES_MISMATCH", muscles.character, part.fullName() + ": " + problem);
   }
+  for (const JiggleSetup& setup : options.jiggles) {
+    std::string problem = jiggleSetupProblem(setup, skeleton);
+    if (setup.host == JiggleHost::kMuscle && (setup.muscle < 0 || setup.muscle >= static_cast<int>(muscles.parts.size())))
+      problem = "names no muscle of this muscle set";
+    if (!problem.empty()) fail("JIGGLE_UNRESOLVED", setup.name, problem);
+  }
+  checkHits(options.hits, options.jiggles);
   BakeResult result;
   result.influences = options.influences;
   const int muscle_count = static_cast<int>(muscles.parts.size());
@@ -123,9 +187,11 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
+    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, muscles, clip, options, result, &baked, &frames);
     clip_frames.push_back(std::move(frames));
     result.clips.push_back(std::move(baked));
   }
+  timing.evaluate = lap();
   std::vector<SkinFrame> all_frames;
   for (const auto& frames : clip_frames) all_frames.insert(all_frames.end(), frames.begin(), frames.end());
 
@@ -144,6 +210,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.full = normalized(addMuscleInfluences(mesh, base, surface, skeleton, muscles, muscle_joints, radii, options.weights));
     QuantizedInfluences quantized =
         quantizeForMotion(pruneInfluences(baked.full, options.influences), mesh.positions, all_frames);
+    timing.weights += lap();
     approximations.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
 
     // Skin-local indices: the file's joint list, then the muscles' skinned joints.
@@ -168,10 +235,12 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.standard = standardSkinAttributes(baked.quantized, skin_size, WeightStorage::kUnsignedShort);
     baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
     baked.packed_attributes = packedGltfAttributes(baked.packed);
+    timing.pack += lap();
     result.vertex_count += baked.quantized.vertexCount();
     result.parts.push_back(std::move(baked));
   }
 
+  timing.weights += lap();
   // Deformation error of the pruned, quantized weights against the full-precision ones.
   for (size_t c = 0; c < result.clips.size(); ++c) {
     BakedClip& baked = result.clips[c];
@@ -185,6 +254,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     }
     result.error = combineDeformationErrors(result.error, baked.error);
   }
+  timing.error = lap();
   return result;
 }
 

@@ -14,6 +14,7 @@
 #include "anatomy/muscle_set.h"
 #include "pipeline/deformation_error.h"
 #include "pipeline/influences.h"
+#include "pipeline/jiggle.h"
 #include "pipeline/muscle_weights.h"
 #include "pipeline/pack_influences.h"
 
@@ -23,6 +24,10 @@ struct BakeOptions {
   int influences = 4;  // 4, 7 or 10
   double fps = 0.0;    // 0: sample each clip at its own key times
   MuscleWeightOptions weights;
+  // Secondary motion baked into every clip (docs/jiggle.md): setups from resolveJiggles() against
+  // this character and these muscles, and the hits that kick them.
+  std::vector<JiggleSetup> jiggles;
+  std::vector<HitImpulse> hits;
 };
 
 // The four joints of one muscle group. Each is a new node: the skinned joint is also added to every
@@ -47,6 +52,10 @@ struct BakedClip {
   // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
   std::vector<std::vector<double>> ratio;
   DeformationError error;  // pruning + quantization against full-precision weights, metres
+  // One track per BakeOptions::jiggles entry, in that order, sampled at `times`. A muscle jiggle's
+  // local TRS is already in `local` (its skinned joint); a skeleton joint's replaces the clip's own
+  // channels of that joint.
+  std::vector<JiggleTrack> jiggles;
 };
 
 struct BakedPart {
@@ -69,8 +78,17 @@ struct BakeResult {
   DeformationError error;  // over every clip
 };
 
+// Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).
+struct BakeTimings {
+  double evaluate = 0.0;  // sampling every clip and evaluating the muscle joints
+  double weights = 0.0;   // muscle weights, smoothing, pruning and rounding
+  double pack = 0.0;      // glTF attributes and packed buffers
+  double error = 0.0;     // deformation error over every frame
+};
+
 // Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.
-BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options);
+BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options,
+                         BakeTimings* timings = nullptr);
 
 std::string muscleJointName(const MusclePart& part, MuscleJointRole role);
 

@@ -84,7 +84,8 @@ InfluenceSet influencesFromMesh(const MeshPart& part);
 
 // Every problem that would make pruning or quantizing meaningless: a joint outside [0, joint_count)
 // in a non-zero slot, a NaN/infinite or negative weight, a vertex whose weights sum to 0.
-// Run it first; the functions below throw Error INTERNAL on such input.
+// Run it first and report what it finds: pruneInfluences() and quantizeInfluences() throw Error
+// INTERNAL on negative, non-finite or all-zero weights, standardSkinAttributes() on a joint out of range.
 std::vector<InfluenceIssue> checkInfluences(const InfluenceSet& set, int joint_count);
 
 // Keeps each vertex's `max_influences` largest weights (equal weights: lower joint index first, so the

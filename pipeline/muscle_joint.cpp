@@ -26,8 +26,6 @@ constexpr double kMinLengthFraction = 1e-9;
 // rotation is undefined there (any half turn about an axis across the fibre qualifies).
 constexpr double kReversedFibre = 1e-12;
 
-bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
-
 Eigen::Vector3d acrossFibre(const Eigen::Vector3d& v, const Eigen::Vector3d& fibre) {
   return v - v.dot(fibre) * fibre;
 }
@@ -67,7 +65,7 @@ std::string musclePartProblem(const MusclePart& part, const Skeleton& skeleton) 
     return "origin.joint " + std::to_string(part.origin.joint) + joints;
   if (part.insertion.joint < 0 || part.insertion.joint >= skeleton.size())
     return "insertion.joint " + std::to_string(part.insertion.joint) + joints;
-  if (!finite(part.origin.world) || !finite(part.insertion.world) || !finite(part.driver.world))
+  if (!part.origin.world.allFinite() || !part.insertion.world.allFinite() || !part.driver.world.allFinite())
     return "a locator position is not finite";
   const double length = (part.insertion.world - part.origin.world).norm();
   if (!(length >= kMinMuscleRestLength))

@@ -19,6 +19,8 @@ def main(repo: pathlib.Path) -> int:
     checks = [("naming_map.schema.json", p) for p in sorted((repo / "presets" / "skeletons").glob("*.json"))]
     checks += [("landmark_rules.schema.json", repo / "presets" / "landmarks.json")]
     checks += [("muscle_preset.schema.json", p) for p in sorted((repo / "presets" / "muscles").glob("*.json"))]
+    checks += [("jiggle_preset.schema.json", p) for p in sorted((repo / "presets" / "jiggle").glob("*.json"))]
+    checks += [("build_manifest.schema.json", repo / "examples" / "build_manifest.json")]
     failures = 0
     for schema, path in checks:
         errors = list(validator(schema).iter_errors(json.loads(path.read_text())))
@@ -32,11 +34,20 @@ def main(repo: pathlib.Path) -> int:
     broken_key["muscles"][0]["compresion"] = 0.5
     broken_landmark = copy.deepcopy(preset)
     broken_landmark["muscles"][0]["origin_attach"] = "shoulderblade"
-    for label, document in [("typo'd key", broken_key), ("unknown landmark", broken_landmark)]:
-        rejected = not validator("muscle_preset.schema.json").is_valid(document)
+    jiggle = json.loads((repo / "presets" / "jiggle" / "gow_examples.json").read_text())
+    broken_jiggle = copy.deepcopy(jiggle)
+    broken_jiggle["jiggles"][0]["stifness"] = 0.5
+    manifest = json.loads((repo / "examples" / "build_manifest.json").read_text())
+    broken_manifest = copy.deepcopy(manifest)
+    broken_manifest["characters"][1]["muscles"] = "tuned.json"
+    negatives = [("build_manifest.schema.json", "character with both muscles and muscles_from", broken_manifest),("muscle_preset.schema.json", "typo'd key", broken_key),
+                 ("muscle_preset.schema.json", "unknown landmark", broken_landmark),
+                 ("jiggle_preset.schema.json", "typo'd jiggle key", broken_jiggle)]
+    for schema, label, document in negatives:
+        rejected = not validator(schema).is_valid(document)
         print(f"{'ok  ' if rejected else 'FAIL'} schema rejects a {label}")
         failures += not rejected
-    print(f"{len(checks) + 2 - failures} passed, {failures} failed")
+    print(f"{len(checks) + len(negatives) - failures} passed, {failures} failed")
     return 1 if failures else 0
 
 if __name__ == "__main__":

@@ -7,7 +7,9 @@
 
 #include "anatomy/error.h"
 #include "anatomy/placement.h"
+#include "anatomy/retarget.h"
 #include "cli/common.h"
+#include "cli/validation_run.h"
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
 #include "formats/gltf_bake.h"
@@ -15,7 +17,6 @@
 #include "formats/muscle_json.h"
 #include "formats/preset_json.h"
 #include "pipeline/bake.h"
-#include "cli/build_reports.h"
 
 namespace rigbake::cli {
 
@@ -30,6 +31,7 @@ const char* jobStatusName(JobStatus status) {
 
 SharedPresets loadSharedPresets(const std::string& presets_dir) {
   SharedPresets shared;
+  shared.directory = presets_dir;
   shared.maps = readNamingMaps(presets_dir + "/skeletons");
   shared.rules = readLandmarkRules(presets_dir + "/landmarks.json");
   return shared;
@@ -75,6 +77,22 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
   }
   return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
                                 std::to_string(character.influences) + " muscles_from " + character.muscles_from);
+}
+
+// Validates the written model against its muscle file and writes the three reports; returns how many
+// error-severity checks failed.
+int validateCharacter(const CharacterOutputs& out, const BuildCharacter& character, const SharedPresets& presets) {
+  ValidationRequest request;
+  request.baked = out.model;
+  request.muscles = out.muscles;
+  request.preset = character.preset;
+  request.presets.presets_dir = presets.directory;
+  const Report report = validateBakedFile(request);
+  writeReports(report, {out.report_json, out.report_junit, out.report_html});
+  int failed = 0;
+  for (const CheckResult& check : report.checks)
+    failed += check.status == CheckStatus::kFail && check.severity == Severity::kError;
+  return failed;
 }
 
 void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobOutcome& outcome) {
@@ -135,7 +153,8 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
       Loaded from = loadResolved(source->input, presets);
       MuscleSet source_muscles =
           readMuscleJson(characterOutputs(manifest, *source).muscles, from.character.character, from.landmarks, preset);
-      muscles = retargetForBuild(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks);
+      muscles = retargetMuscles(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks, preset,
+                                characterOutputs(manifest, *source).muscles);
     } else {
       muscles = placeMuscles(body, loaded.landmarks, preset, Sides::kBoth);
     }
@@ -149,7 +168,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     JobOutcome outcome;
     outcome.name = character.name;
     outcome.status = JobStatus::kBuilt;
-    outcome.checks_failed = writeCharacterReports(out, character.name, out.model, out.muscles, preset);
+    outcome.checks_failed = validateCharacter(out, character, presets);
     writeStamp(out, hash, outcome);
     return outcome;
   } catch (const Error& error) {

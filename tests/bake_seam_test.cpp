@@ -47,7 +47,8 @@ TEST_CASE("bake: split vertices at a seam get identical muscle weights") {
         for (auto& [joint, w] : baked_a) CHECK(std::abs(baked_b[joint] - w) < 1e-12);
       }
     }
-    // Every character here has split vertices: count them so that the test cannot pass on none.
-    CHECK(seams > 0);
+    // Every shared asset has split vertices (the generated sample is one welded surface): count them so
+    // that the test cannot pass on none.
+    if (path != test::sampleGlbPath()) CHECK(seams > 0);
   }
 }

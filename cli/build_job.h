@@ -21,6 +21,7 @@ struct JobOutcome {
 
 // Presets read once and shared, read-only, by every job.
 struct SharedPresets {
+  std::string directory;
   std::vector<NamingMap> maps;
   LandmarkRules rules;
 };

@@ -14,48 +14,10 @@
 #include <nlohmann/json.hpp>
 
 #include "anatomy/error.h"
+#include "formats/gltf_json_value.h"
 
 namespace rigbake {
 namespace {
-
-tinygltf::Value toValue(const nlohmann::json& json) {
-  switch (json.type()) {
-    case nlohmann::json::value_t::boolean: return tinygltf::Value(json.get<bool>());
-    case nlohmann::json::value_t::number_integer:
-    case nlohmann::json::value_t::number_unsigned: return tinygltf::Value(json.get<int>());
-    case nlohmann::json::value_t::number_float: return tinygltf::Value(json.get<double>());
-    case nlohmann::json::value_t::string: return tinygltf::Value(json.get<std::string>());
-    case nlohmann::json::value_t::array: {
-      tinygltf::Value::Array array;
-      for (const auto& item : json) array.push_back(toValue(item));
-      return tinygltf::Value(std::move(array));
-    }
-    case nlohmann::json::value_t::object: {
-      tinygltf::Value::Object object;
-      for (const auto& [key, item] : json.items()) object[key] = toValue(item);
-      return tinygltf::Value(std::move(object));
-    }
-    default: return tinygltf::Value();
-  }
-}
-
-nlohmann::json toJson(const tinygltf::Value& value) {
-  if (value.IsBool()) return value.Get<bool>();
-  if (value.IsInt()) return value.Get<int>();
-  if (value.IsReal()) return value.Get<double>();
-  if (value.IsString()) return value.Get<std::string>();
-  if (value.IsArray()) {
-    nlohmann::json array = nlohmann::json::array();
-    for (size_t i = 0; i < value.ArrayLen(); ++i) array.push_back(toJson(value.Get(static_cast<int>(i))));
-    return array;
-  }
-  if (value.IsObject()) {
-    nlohmann::json object = nlohmann::json::object();
-    for (const std::string& key : value.Keys()) object[key] = toJson(value.Get(key));
-    return object;
-  }
-  return nullptr;
-}
 
 // glTF numbers are floats; rounding to 6 significant digits keeps the JSON short and deterministic.
 double rounded(double value) {
@@ -111,7 +73,7 @@ void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& spr
   }
   if (vrm1) {
     nlohmann::json extension = model->extensions.count("VRMC_springBone")
-                                   ? toJson(model->extensions["VRMC_springBone"])
+                                   ? toJsonValue(model->extensions["VRMC_springBone"])
                                    : nlohmann::json{{"specVersion", "1.0"}};
     if (!extension.is_object()) fail("GLTF_PARSE_FAILED", "/extensions/VRMC_springBone", "must be an object");
     if (!extension.contains("springs")) extension["springs"] = nlohmann::json::array();
@@ -125,13 +87,13 @@ void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& spr
                              {"dragForce", spring.drag_force}};
       extension["springs"].push_back({{"name", spring.name}, {"joints", {head, {{"node", tail}}}}});
     }
-    model->extensions["VRMC_springBone"] = toValue(extension);
+    model->extensions["VRMC_springBone"] = toGltfValue(extension);
     bool listed = false;
     for (const std::string& used : model->extensionsUsed) listed |= used == "VRMC_springBone";
     if (!listed) model->extensionsUsed.push_back("VRMC_springBone");
     return;
   }
-  nlohmann::json extension = toJson(model->extensions["VRM"]);
+  nlohmann::json extension = toJsonValue(model->extensions["VRM"]);
   if (!extension.is_object()) fail("GLTF_PARSE_FAILED", "/extensions/VRM", "must be an object");
   nlohmann::json& secondary = extension["secondaryAnimation"];
   if (secondary.is_null()) secondary = nlohmann::json::object();
@@ -153,7 +115,7 @@ void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& spr
          {"bones", {spring.head_node}},
          {"colliderGroups", nlohmann::json::array()}});
   }
-  model->extensions["VRM"] = toValue(extension);
+  model->extensions["VRM"] = toGltfValue(extension);
 }
 
 }  // namespace rigbake

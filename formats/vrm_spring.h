@@ -32,7 +32,7 @@ struct VrmSpring {
   double stiffness = 0.0;      // VRM stiffness (stiffnessForce)
   double drag_force = 0.0;     // VRM dragForce, [0, 1]
   double gravity_power = 0.0;  // the jiggle rests on its animated target: no gravity
-  Eigen::Vector3d gravity_dir = -Eigen::Vector3d::UnitY();
+  Eigen::Vector3d gravity_dir{0.0, -1.0, 0.0};
   double hit_radius = 0.0;     // metres
 };
 

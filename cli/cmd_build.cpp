@@ -18,6 +18,7 @@
 #include "cli/common.h"
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
+#include "formats/report_junit.h"
 
 namespace rigbake::cli {
 namespace {
@@ -33,20 +34,6 @@ struct BuildCommandOptions {
   bool json = false;
   PresetOptions presets;
 };
-
-std::string xmlEscape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 // The summary lists the characters in manifest order with no timings, so it is the same whatever -j.
 void writeSummary(const BuildManifest& manifest, const std::vector<JobOutcome>& outcomes) {
@@ -201,7 +188,7 @@ void addBuildCommand(CLI::App& app, Runner* runner) {
       "Build many characters from a manifest (docs/build.md): place or retarget muscles, bake, validate, and write "
       "OUT/NAME/{NAME.glb, muscles.json, report.json, report.junit.xml, report.html} plus OUT/summary.json and "
       "summary.junit.xml. Runs in parallel, skips characters whose inputs did not change (content hashes), goes on past "
-      "failures and names them all at the end (exit 4).");
+      "failures and names them all at the end (exit 1).");
   command->add_option("manifest", options->manifest, "Build manifest (JSON)")->required();
   command->add_option("-j,--jobs", options->jobs, "Characters built at once (default: one per core)")->check(CLI::NonNegativeNumber);
   command->add_option("--emit-ninja", options->emit_ninja, "Write a Ninja file with one edge per character instead of building");

@@ -1,5 +1,5 @@
 // `rigbake validate` as CI runs it: sample -> place -> bake -> validate writes the three reports and
-// exits 0; a muscle file with a locator 1 m off makes it exit 4 with LOCATOR_NEAR_SURFACE failed in
+// exits 0; a muscle file with a locator 1 m off makes it exit 1 with LOCATOR_NEAR_SURFACE failed in
 // every report; a bad config is exit 3 and writes nothing; the report is byte-identical across runs,
 // and Chromium renders it.
 #include "validate_fixture.h"
@@ -88,7 +88,7 @@ TEST_CASE("cli validate: a muscle locator 1 m off fails LOCATOR_NEAR_SURFACE wit
   test::CliResult run =
       runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(edited) + " --report " + ext::shellQuote(dir));
   INFO(run.err);
-  CHECK(run.exit_code == 4);
+  CHECK(run.exit_code == 1);
   CHECK(run.err.find("LOCATOR_NEAR_SURFACE " + moved + "/origin: error:") != std::string::npos);
   const nlohmann::json report = nlohmann::json::parse(slurp(dir + "/report.json"));
   CHECK(report["passed"] == false);
@@ -124,7 +124,7 @@ TEST_CASE("cli validate: --config overrides a threshold; a malformed config is e
                                   " --report " + ext::shellQuote(out / "strict"));
   INFO(strict.err);
   // 16-bit WEIGHTS_n and 0.001 packed weights differ by rounding, so a zero tolerance fails.
-  CHECK(strict.exit_code == 4);
+  CHECK(strict.exit_code == 1);
   CHECK(checkIn(nlohmann::json::parse(slurp(out / "strict/report.json")), "PACKED_DEFORMATION_ERROR")["status"] == "fail");
 
   std::ofstream(config) << R"({"checks": {"PACKED_DEFORMATION_ERROR": {"limit": 0.0}}})";

@@ -1,0 +1,82 @@
+// `rigbake validate BAKED [--muscles M] [--config C] --report DIR [--khronos] [--json]`: runs every check
+// of pipeline/checks.h on a baked character and writes DIR/report.json, DIR/report.junit.xml and
+// DIR/report.html. Exit 0 when every error-severity check passes, 1 otherwise; a
+// file rigbake cannot read at all is still exit 3, as for every command.
+#include <iostream>
+
+#include "anatomy/error.h"
+#include "cli/commands.h"
+#include "cli/common.h"
+#include "cli/validation_run.h"
+#include "formats/report_json.h"
+#include "formats/validate_config.h"
+#include "pipeline/checks.h"
+
+namespace rigbake::cli {
+namespace {
+
+struct ValidateCommandOptions {
+  std::string baked;
+  std::string muscles;
+  std::string preset = "gow_biped";
+  std::string config;
+  std::string report_dir;
+  bool khronos = false;
+  bool json = false;
+  PresetOptions presets;
+};
+
+int run(const ValidateCommandOptions& options) {
+  ValidationRequest request;
+  request.baked = options.baked;
+  request.muscles = options.muscles;
+  request.preset = options.preset;
+  request.presets = options.presets;
+  if (!options.config.empty()) request.config = readValidationConfig(options.config);
+  request.khronos = options.khronos;
+  const Report report = validateBakedFile(request);
+  writeReports(report, reportPathsIn(options.report_dir));
+  const std::string character_name = fileNameOf(options.baked);
+
+  if (options.json) std::cout << reportJson(report);
+  int failed_errors = 0, failed_warnings = 0, skipped = 0;
+  for (const CheckResult& check : report.checks) {
+    if (check.status == CheckStatus::kSkipped) ++skipped;
+    if (check.status != CheckStatus::kFail) continue;
+    ++(check.severity == Severity::kError ? failed_errors : failed_warnings);
+    std::cerr << check.code << " " << (check.location.empty() ? character_name : check.location) << ": "
+              << severityName(check.severity) << ": " << check.message << "\n";
+  }
+  std::cerr << "validated " << character_name << ": " << report.checks.size() << " checks, " << failed_errors
+            << " errors, " << failed_warnings << " warnings, " << skipped << " skipped; report in "
+            << options.report_dir << "/report.html\n";
+  return static_cast<int>(report.passed() ? ExitCode::kOk : ExitCode::kChecksFailed);
+}
+
+}  // namespace
+
+void addValidateCommand(CLI::App& app, Runner* runner) {
+  auto options = std::make_shared<ValidateCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "validate",
+      "Check a baked character (landmarks, muscle locators, muscle length ratios over every clip, skin weights and "
+      "indices, influence counts, packed-weight deformation error, glTF structure, optionally the Khronos "
+      "glTF-Validator) and write report.json, report.junit.xml and report.html into --report DIR. Exit 0 when every "
+      "error-severity check passes, 1 otherwise. docs/validate.md lists the checks.");
+  command->add_option("baked", options->baked, "Baked character (.glb, .gltf, .vrm) from `rigbake bake`")->required();
+  command->add_option("--report", options->report_dir, "Directory to write the reports into (created if missing)")
+      ->required();
+  command->add_option("--muscles", options->muscles,
+                      "Muscle JSON the character was baked with; without it the muscle checks are skipped");
+  command->add_option("--preset", options->preset, "Muscle preset for a positions-only --muscles file")
+      ->capture_default_str();
+  command->add_option("--config", options->config,
+                      "JSON file overriding check thresholds and severities (docs/validate.md)");
+  command->add_flag("--khronos", options->khronos,
+                    "Also run the Khronos glTF-Validator (needs node and scripts/install-validator.sh)");
+  command->add_flag("--json", options->json, "Also print report.json on stdout");
+  addPresetOptions(command, &options->presets);
+  command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
+}
+
+}  // namespace rigbake::cli

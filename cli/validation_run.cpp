@@ -1,0 +1,130 @@
+#include "cli/validation_run.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/error.h"
+#include "formats/atomic_file.h"
+#include "formats/baked_gltf.h"
+#include "formats/muscle_json.h"
+#include "formats/report_html.h"
+#include "formats/report_json.h"
+#include "formats/report_junit.h"
+
+namespace rigbake::cli {
+namespace {
+
+std::string shellQuote(const std::string& text) {
+  std::string quoted = "'";
+  for (char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+bool onPath(const std::string& program) {
+  return std::system(("command -v " + shellQuote(program) + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+// The node runner ships in the source tree's scripts/, beside presets/; the validator package is
+// where scripts/install-validator.sh puts it unless RIGBAKE_GLTF_VALIDATOR says otherwise.
+ExternalValidation runKhronosValidator(const std::string& path) {
+  ExternalValidation result;
+  const std::filesystem::path source = std::filesystem::path(RIGBAKE_DEFAULT_PRESET_DIR).parent_path();
+  const std::string runner = (source / "scripts" / "gltf-validate.js").string();
+  const char* env = std::getenv("RIGBAKE_GLTF_VALIDATOR");
+  const std::string package = env ? std::string(env) : (source / ".tools" / "node_modules" / "gltf-validator").string();
+  if (!onPath("node")) {
+    result.skip_reason = "node is not on PATH";
+    return result;
+  }
+  if (!std::filesystem::exists(runner) || !std::filesystem::exists(package + "/package.json")) {
+    result.skip_reason = "gltf-validator is not installed at " + package + " (run scripts/install-validator.sh)";
+    return result;
+  }
+  std::string output;
+  FILE* pipe = popen(("node " + shellQuote(runner) + " " + shellQuote(path) + " 2>&1").c_str(), "r");
+  if (!pipe) {
+    result.skip_reason = "could not start node";
+    return result;
+  }
+  char chunk[4096];
+  size_t n;
+  while ((n = fread(chunk, 1, sizeof(chunk), pipe)) > 0) output.append(chunk, n);
+  pclose(pipe);
+  const nlohmann::json summary = nlohmann::json::parse(output, nullptr, false);
+  if (summary.is_discarded() || !summary.is_object() || !summary.contains("numErrors")) {
+    result.skip_reason = "gltf-validator gave no report: " + output.substr(0, output.find('\n'));
+    return result;
+  }
+  result.ran = true;
+  result.errors = summary.value("numErrors", 0);
+  result.warnings = summary.value("numWarnings", 0);
+  for (const std::string severity : {"error", "warning"}) {
+    for (const auto& issue : summary.value("issues", nlohmann::json::array())) {
+      if (issue.value("severity", "") != severity) continue;
+      result.issues.push_back({issue.value("pointer", ""), severity + " " + issue.value("code", "") + ": " +
+                                                               issue.value("message", "")});
+    }
+  }
+  return result;
+}
+
+}  // namespace
+
+Report validateBakedFile(const ValidationRequest& request) {
+  LoadedCharacter loaded;
+  LandmarkSet landmarks;
+  bool landmarks_resolved = true;
+  std::string landmark_problem;
+  try {
+    ResolvedCharacter resolved = loadAndResolve(request.baked, request.presets);
+    loaded = std::move(resolved.loaded);
+    landmarks = std::move(resolved.landmarks);
+  } catch (const Error& e) {
+    // An unresolvable landmark is a finding about this character, not a reason to write no report.
+    if (e.code() != "LANDMARK_UNRESOLVED") throw;
+    loaded = loadCharacter(request.baked);
+    landmarks_resolved = false;
+    landmark_problem = e.what();
+  }
+  const Character& character = loaded.character;
+  MuscleSet muscles;
+  if (!request.muscles.empty()) {
+    MusclePreset preset = loadMusclePreset(request.presets, request.preset);
+    muscles = readMuscleJson(request.muscles, character, landmarks, preset);
+  }
+  const BakedFileData file = readBakedFileData(loaded);
+
+  ValidationInputs inputs;
+  inputs.character_name = fileNameOf(request.baked);
+  inputs.character = &character;
+  inputs.landmarks = landmarks_resolved ? &landmarks : nullptr;
+  inputs.landmark_problem = landmark_problem;
+  inputs.muscles = request.muscles.empty() ? nullptr : &muscles;
+  inputs.file = &file;
+  if (request.khronos) inputs.khronos = runKhronosValidator(request.baked);
+  else inputs.khronos.skip_reason = "not requested (pass --khronos)";
+  return validateBakedCharacter(inputs, request.config);
+}
+
+ReportPaths reportPathsIn(const std::string& directory) {
+  return {directory + "/report.json", directory + "/report.junit.xml", directory + "/report.html"};
+}
+
+void writeReports(const Report& report, const ReportPaths& paths) {
+  const std::string json = reportJson(report);
+  const std::string junit = reportJunit({report});
+  const std::string html = reportHtml(report);
+  for (const std::string& path : {paths.json, paths.junit, paths.html}) {
+    std::error_code error;
+    std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent, error);
+    if (error) fail("IO_WRITE_FAILED", parent.string(), "cannot create the report directory: " + error.message());
+  }
+  writeFileAtomically(paths.json, json);
+  writeFileAtomically(paths.junit, junit);
+  writeFileAtomically(paths.html, html);
+}
+
+}  // namespace rigbake::cli

@@ -1,0 +1,31 @@
+// One validation of a baked file, shared by `rigbake validate` and the batch build: load and resolve
+// the character (an unresolvable landmark is a finding, not a failure to report), read its muscle
+// file, run every check, and write report.json, report.junit.xml and report.html.
+#pragma once
+
+#include <string>
+
+#include "cli/common.h"
+#include "pipeline/checks.h"
+
+namespace rigbake::cli {
+
+struct ValidationRequest {
+  std::string baked;          // the baked .glb / .gltf / .vrm
+  std::string muscles;        // its muscle JSON, or empty to skip the muscle checks
+  std::string preset = "gow_biped";  // preset for a positions-only muscle file: a name or a path
+  PresetOptions presets;
+  ValidationConfig config;
+  bool khronos = false;       // also run the Khronos glTF-Validator when it is installed
+};
+
+Report validateBakedFile(const ValidationRequest& request);
+
+// Renders all three reports first, then writes each atomically, so a failure leaves no partial set.
+struct ReportPaths {
+  std::string json, junit, html;
+};
+ReportPaths reportPathsIn(const std::string& directory);
+void writeReports(const Report& report, const ReportPaths& paths);
+
+}  // namespace rigbake::cli

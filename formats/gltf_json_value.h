@@ -1,0 +1,18 @@
+// Conversions between nlohmann::json and tinygltf::Value, for extensions and extras that rigbake
+// builds as JSON (VRM humanoid maps, spring bones) or reads back.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+namespace tinygltf {
+class Value;
+}
+
+namespace rigbake {
+
+// An empty array inside an object is left out: tinygltf 2.7 serializes an empty array as `null`,
+// which schemas that allow the key to be absent (VRM 0.x boneGroups, colliderGroups) do not allow.
+tinygltf::Value toGltfValue(const nlohmann::json& json);
+nlohmann::json toJsonValue(const tinygltf::Value& value);
+
+}  // namespace rigbake
