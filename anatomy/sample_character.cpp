@@ -686,9 +686,7 @@ SampleCharacter makeSampleCharacter(const SampleOptions& options) {
     SampleJoint joint;
     joint.name = skeleton.names[j];
     if (options.vrm != SampleVrm::kNone) {
-      char neutral[16];
-      std::snprintf(neutral, sizeof neutral, "bone_%02d", j);
-      joint.name = neutral;
+      joint.name = std::string(j < 10 ? "bone_0" : "bone_") + std::to_string(j);
     }
     joint.parent = skeleton.parents[j];
     if (joint.parent < 0) {

@@ -32,6 +32,7 @@ struct BakeCommandOptions {
   std::string stats_output;
   std::string jiggle;
   std::string hits;
+  bool springs_only = false;
   int influences = 4;
   double fps = 0.0;
   bool json = false;
@@ -119,12 +120,17 @@ int run(const BakeCommandOptions& options) {
     fail("USAGE", "--hits", "needs --jiggle: hits kick jiggle joints");
   }
   if (!options.hits.empty()) bake_options.hits = readHits(options.hits);
-  BakeResult bake = bakeCharacter(character, muscles, bake_options);
+  if (options.springs_only && options.jiggle.empty()) fail("USAGE", "--vrm-springs-only", "needs --jiggle");
+  BakeOptions baked_motion = bake_options;
+  if (options.springs_only) baked_motion.jiggles.clear();
+  BakeResult bake = bakeCharacter(character, muscles, baked_motion);
   nlohmann::json stats = statsJson(options, muscles, bake);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
   tinygltf::Model model = bakedModel(*resolved.loaded.document, character, muscles, bake);
   const bool vrm_springs = !bake_options.jiggles.empty() && isVrm(model);
+  if (options.springs_only && !vrm_springs)
+    fail("USAGE", "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
   if (vrm_springs) addSpringBones(&model, character, bake_options, bake, static_cast<int>(model.nodes.size() - bake.joints.size()));
   std::string model_bytes = serializeGltf(model, isBinaryGltfPath(options.output));
   std::vector<PackedInfluences> packed;
@@ -143,7 +149,8 @@ int run(const BakeCommandOptions& options) {
             << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
   if (!bake_options.jiggles.empty()) {
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()
-              << " hits, baked into every clip" << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
+              << " hits, " << (options.springs_only ? "not baked" : "baked into every clip")
+              << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
   }
   return 0;
 }
@@ -177,6 +184,9 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "limits simulated on a fixed 240 Hz step and baked into every clip; on a VRM also exported as "
                       "spring bones (docs/jiggle.md)");
   command->add_option("--hits", options->hits, "Hit reactions (JSON, docs/jiggle.md) that kick the jiggle joints");
+  command->add_flag("--vrm-springs-only", options->springs_only,
+                    "VRM only: export the --jiggle joints as spring bones for the runtime to simulate, and do not "
+                    "also bake them into the clips");
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print the figures as JSON on stdout");
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

@@ -8,11 +8,13 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <set>
 
 #include "anatomy/error.h"
 #include "formats/gltf_accessor.h"
+#include "formats/gltf_json_value.h"
 
 namespace rigbake {
 namespace {
@@ -192,23 +194,64 @@ void readPackedInfluences(const tinygltf::Model& model, const tinygltf::Primitiv
   skin->packed = std::move(packed);
 }
 
+std::vector<double> numbersOf(const tinygltf::Value& array) {
+  std::vector<double> values;
+  if (!array.IsArray()) return values;
+  for (size_t i = 0; i < array.ArrayLen(); ++i) {
+    const tinygltf::Value& item = array.Get(static_cast<int>(i));
+    values.push_back(item.IsNumber() || item.IsInt() ? item.GetNumberAsDouble() : std::nan(""));
+  }
+  return values;
+}
+
+// The jiggle angles the bake recorded per clip (formats/gltf_bake.cpp writeJiggles).
+void readJiggles(const tinygltf::Model& model, BakedFileData* data) {
+  for (size_t a = 0; a < model.animations.size(); ++a) {
+    const tinygltf::Value& block = gltfMember(model.animations[a].extras, "rigbake");
+    const tinygltf::Value& jiggles = gltfMember(block, "jiggle");
+    if (!jiggles.IsArray()) continue;
+    ClipJiggles clip;
+    clip.clip = model.animations[a].name.empty() ? "animation" + std::to_string(a) : model.animations[a].name;
+    clip.pointer = "/animations/" + std::to_string(a) + "/extras/rigbake";
+    clip.times = numbersOf(gltfMember(block, "times"));
+    for (size_t j = 0; j < jiggles.ArrayLen(); ++j) {
+      const tinygltf::Value& entry = jiggles.Get(static_cast<int>(j));
+      JiggleSeries series;
+      const tinygltf::Value& joint = gltfMember(entry, "joint");
+      const tinygltf::Value& host = gltfMember(entry, "host");
+      series.joint = joint.IsString() ? joint.Get<std::string>() : "";
+      series.host = host.IsString() ? host.Get<std::string>() : "";
+      series.angle_deg = numbersOf(gltfMember(entry, "angle_deg"));
+      series.clamp_deg = numbersOf(gltfMember(entry, "clamp_deg"));
+      if (series.joint.empty() || series.angle_deg.size() != clip.times.size() ||
+          series.clamp_deg.size() != clip.times.size()) {
+        data->structure.push_back({clip.pointer + "/jiggle/" + std::to_string(j),
+                                   "needs a joint name and one angle_deg and clamp_deg per entry of times"});
+        continue;
+      }
+      clip.jiggles.push_back(std::move(series));
+    }
+    data->jiggles.push_back(std::move(clip));
+  }
+}
+
 void readMuscleNodes(const tinygltf::Model& model, const Character& character, BakedFileData* data) {
   static const std::map<std::string, std::string> kSuffix = {
       {"base", "_muscleBase"}, {"tip", "_muscleTip"}, {"driver", "_muscleDriver"}, {"skinned", "_muscleSkinned"}};
   for (size_t n = 0; n < model.nodes.size(); ++n) {
-    const tinygltf::Value& block = model.nodes[n].extras.Get("rigbake");
+    const tinygltf::Value& block = gltfMember(model.nodes[n].extras, "rigbake");
     if (!block.IsObject()) continue;
     const std::string pointer = "/nodes/" + std::to_string(n) + "/extras/rigbake";
     FileMuscleNode node;
     node.node = static_cast<int>(n);
     node.name = model.nodes[n].name;
     auto text = [&](const char* key, std::string* out) {
-      const tinygltf::Value& value = block.Get(key);
+      const tinygltf::Value& value = gltfMember(block, key);
       if (value.IsString()) *out = value.Get<std::string>();
       else data->structure.push_back({pointer + "/" + key, std::string(key) + " must be a string"});
     };
     auto number = [&](const char* key, double* out) {
-      const tinygltf::Value& value = block.Get(key);
+      const tinygltf::Value& value = gltfMember(block, key);
       if (value.IsNumber() || value.IsInt()) *out = value.GetNumberAsDouble();
       else data->structure.push_back({pointer + "/" + key, std::string(key) + " must be a number"});
     };
@@ -306,6 +349,7 @@ BakedFileData readBakedFileData(const LoadedCharacter& loaded) {
                                              std::to_string(skin.joints.size()) + " joints"});
   }
   readMuscleNodes(model, character, &data);
+  readJiggles(model, &data);
   const bool baked = !data.muscle_nodes.empty();
   for (size_t p = 0; p < character.meshes.size(); ++p) {
     const MeshPart& part = character.meshes[p];

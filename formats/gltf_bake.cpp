@@ -101,6 +101,7 @@ void writeJiggles(const BakedClip& clip, const Skeleton& skeleton, int input, Gl
   tinygltf::Value::Object extras = animation->extras.IsObject() ? animation->extras.Get<tinygltf::Value::Object>()
                                                                  : tinygltf::Value::Object{};
   tinygltf::Value::Object rigbake;
+  rigbake["times"] = numbers(clip.times);
   rigbake["jiggle"] = tinygltf::Value(report);
   extras["rigbake"] = tinygltf::Value(rigbake);
   animation->extras = tinygltf::Value(extras);

@@ -46,4 +46,10 @@ nlohmann::json toJsonValue(const tinygltf::Value& value) {
   return nullptr;
 }
 
+const tinygltf::Value& gltfMember(const tinygltf::Value& object, const std::string& key) {
+  static const tinygltf::Value kNull;
+  if (!object.IsObject() || !object.Has(key)) return kNull;
+  return object.Get(key);
+}
+
 }  // namespace rigbake

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <nlohmann/json.hpp>
+#include <string>
 
 namespace tinygltf {
 class Value;
@@ -14,5 +15,9 @@ namespace rigbake {
 // which schemas that allow the key to be absent (VRM 0.x boneGroups, colliderGroups) do not allow.
 tinygltf::Value toGltfValue(const nlohmann::json& json);
 nlohmann::json toJsonValue(const tinygltf::Value& value);
+
+// object[key], or a null Value when `object` is not an object or lacks the key: tinygltf's own
+// Value::Get(key) asserts that it is an object, and input files may put anything there.
+const tinygltf::Value& gltfMember(const tinygltf::Value& object, const std::string& key);
 
 }  // namespace rigbake

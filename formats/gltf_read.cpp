@@ -11,6 +11,7 @@
 #include <set>
 
 #include "anatomy/error.h"
+#include "formats/gltf_json_value.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_accessor.h"
 #include "formats/gltf_document.h"
@@ -365,10 +366,10 @@ void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint
   auto vrm1 = model.extensions.find("VRMC_vrm");
   if (vrm1 != model.extensions.end()) {
     character->vrm_version = "1.0";
-    const tinygltf::Value& bones = vrm1->second.Get("humanoid").Get("humanBones");
+    const tinygltf::Value& bones = gltfMember(gltfMember(vrm1->second, "humanoid"), "humanBones");
     if (bones.IsObject()) {
       for (const std::string& key : bones.Keys()) {
-        const tinygltf::Value& node = bones.Get(key).Get("node");
+        const tinygltf::Value& node = gltfMember(bones.Get(key), "node");
         if (node.IsNumber() || node.IsInt()) {
           int joint = jointOf(node.GetNumberAsInt());
           if (joint >= 0) character->vrm_humanoid[key] = joint;
@@ -380,12 +381,12 @@ void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint
   auto vrm0 = model.extensions.find("VRM");
   if (vrm0 != model.extensions.end()) {
     character->vrm_version = "0.x";
-    const tinygltf::Value& bones = vrm0->second.Get("humanoid").Get("humanBones");
+    const tinygltf::Value& bones = gltfMember(gltfMember(vrm0->second, "humanoid"), "humanBones");
     if (bones.IsArray()) {
       for (size_t i = 0; i < bones.ArrayLen(); ++i) {
         const tinygltf::Value& bone = bones.Get(static_cast<int>(i));
-        const tinygltf::Value& name = bone.Get("bone");
-        const tinygltf::Value& node = bone.Get("node");
+        const tinygltf::Value& name = gltfMember(bone, "bone");
+        const tinygltf::Value& node = gltfMember(bone, "node");
         if (name.IsString() && (node.IsNumber() || node.IsInt())) {
           int joint = jointOf(node.GetNumberAsInt());
           if (joint >= 0) character->vrm_humanoid[name.Get<std::string>()] = joint;

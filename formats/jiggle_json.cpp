@@ -7,13 +7,6 @@
 namespace rigbake {
 namespace {
 
-std::string baseName(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  size_t dot = name.rfind('.');
-  return dot == std::string::npos ? name : name.substr(0, dot);
-}
-
 std::string whereOf(const JsonReader& in) { return in.file() + "#" + (in.pointer().empty() ? "/" : in.pointer()); }
 
 double numberIn(const JsonReader& in, double low, double high) {
@@ -39,7 +32,7 @@ JigglePreset parseJigglePreset(const nlohmann::json& json, const std::string& fi
   in.allowKeys({"$schema", "name", "description", "jiggles"});
   JigglePreset preset;
   preset.file = file;
-  preset.name = in.has("name") ? in.at("name").asString() : baseName(file);
+  preset.name = in.has("name") ? in.at("name").asString() : fileStem(file);
   if (in.has("description")) in.at("description").asString();
   const JsonReader jiggles = in.at("jiggles");
   if (jiggles.arraySize() == 0) jiggles.fail("must list at least one jiggle");

@@ -103,4 +103,11 @@ std::vector<std::string> JsonReader::asStringList() const {
   return result;
 }
 
+std::string fileStem(const std::string& path) {
+  size_t slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  size_t dot = name.rfind('.');
+  return dot == std::string::npos ? name : name.substr(0, dot);
+}
+
 }  // namespace rigbake

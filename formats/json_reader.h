@@ -42,4 +42,7 @@ class JsonReader {
   std::string code_;
 };
 
+// "presets/skeletons/mixamo.json" -> "mixamo": the name a preset gets when it gives none.
+std::string fileStem(const std::string& path);
+
 }  // namespace rigbake

@@ -23,7 +23,7 @@ Eigen::Vector3d readVector(const JsonReader& in) {
   return {in.at(0).asNumber(), in.at(1).asNumber(), in.at(2).asNumber()};
 }
 
-const char* kCode = "MUSCLES_INVALID";
+const char* kMusclesCode = "MUSCLES_INVALID";
 
 }  // namespace
 
@@ -63,7 +63,7 @@ std::string muscleJson(const MuscleSet& muscles, const Skeleton& skeleton, const
 MuscleSet readMuscleJson(const std::string& path, const Character& character, const LandmarkSet& landmarks,
                          const MusclePreset& preset) {
   nlohmann::json json = readJsonFile(path);
-  JsonReader in(json, path, "", kCode);
+  JsonReader in(json, path, "", kMusclesCode);
   in.requireObject();
   const Skeleton& skeleton = character.skeleton;
   MuscleSet set;
@@ -178,7 +178,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
     }
   }
   if (set.parts.empty())
-    rigbake::fail(kCode, path, "no muscle part of preset '" + preset.name + "' found (neither a rigbake block nor talk-shaped groups)");
+    rigbake::fail(kMusclesCode, path, "no muscle part of preset '" + preset.name + "' found (neither a rigbake block nor talk-shaped groups)");
   return set;
 }
 

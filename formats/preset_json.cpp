@@ -9,14 +9,7 @@
 namespace rigbake {
 namespace {
 
-const char* kCode = "PRESET_INVALID";
-
-std::string baseName(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
-  size_t dot = name.rfind('.');
-  return dot == std::string::npos ? name : name.substr(0, dot);
-}
+const char* kPresetCode = "PRESET_INVALID";
 
 void requireLandmark(const JsonReader& where, const std::string& name) {
   if (!isCanonicalLandmark(name)) {
@@ -92,11 +85,11 @@ PointFormula readFormula(const JsonReader& in) {
 
 NamingMap readNamingMap(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
-  JsonReader in(json, path, "", kCode);
+  JsonReader in(json, path, "", kPresetCode);
   in.allowKeys({"$schema", "name", "description", "match", "strip_prefixes", "side_tokens", "landmarks"});
   NamingMap map;
   map.file = path;
-  map.name = in.has("name") ? in.at("name").asString() : baseName(path);
+  map.name = in.has("name") ? in.at("name").asString() : fileStem(path);
   if (in.has("description")) map.description = in.at("description").asString();
   if (in.has("match")) {
     map.match = in.at("match").asString();
@@ -139,7 +132,7 @@ std::vector<NamingMap> readNamingMaps(const std::string& directory) {
 
 LandmarkRules readLandmarkRules(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
-  JsonReader in(json, path, "", kCode);
+  JsonReader in(json, path, "", kPresetCode);
   in.allowKeys({"$schema", "description", "reference_height", "derivations"});
   LandmarkRules rules;
   rules.file = path;
@@ -162,11 +155,11 @@ LandmarkRules readLandmarkRules(const std::string& path) {
 
 MusclePreset readMusclePreset(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
-  JsonReader in(json, path, "", kCode);
+  JsonReader in(json, path, "", kPresetCode);
   in.allowKeys({"$schema", "name", "description", "reference_height", "muscles"});
   MusclePreset preset;
   preset.file = path;
-  preset.name = in.has("name") ? in.at("name").asString() : baseName(path);
+  preset.name = in.has("name") ? in.at("name").asString() : fileStem(path);
   if (in.has("reference_height")) {
     preset.reference_height = in.at("reference_height").asNumber();
     if (preset.reference_height <= 0) in.at("reference_height").fail("must be positive");

@@ -306,6 +306,64 @@ std::string ratioChart(const ClipRatios& clip) {
   return svg;
 }
 
+// ---- Jiggle angle charts ----
+
+// One chart per clip: each jiggle's angle from its animated direction (solid) against its cone's
+// half-angle in that direction (dashed, same colour). The clamp holds when no solid line crosses its
+// dashed twin.
+std::string jiggleChart(const ClipJiggles& clip) {
+  if (clip.jiggles.empty() || clip.times.empty()) return "";
+  static const char* kColours[] = {"#d1495b", "#00798c", "#e08e0b", "#30638e", "#3c9d5d", "#8f2d56", "#6a4c93", "#b5651d"};
+  const double W = 560, H = 230, left = 46, right = 14, top = 26, bottom = 30;
+  double hi = 1.0;
+  for (const JiggleSeries& series : clip.jiggles) {
+    for (double a : series.angle_deg) hi = std::max(hi, a);
+    // A 90-degree cone would flatten small swings; the axis follows the motion, up to the cone.
+    for (double c : series.clamp_deg) hi = std::max(hi, std::min(c, 1.5 * hi));
+  }
+  hi = std::min(90.0, hi * 1.1);
+  const double t0 = clip.times.front(), t1 = clip.times.back();
+  auto X = [&](double t) { return t1 > t0 ? left + (t - t0) / (t1 - t0) * (W - left - right) : (W + left - right) / 2; };
+  auto Y = [&](double a) { return top + (hi - std::min(a, hi)) / hi * (H - top - bottom); };
+  std::string svg = "<svg class=\"chart jiggle\" xmlns=\"http://www.w3.org/2000/svg\" width=\"" + num(W, 0) +
+                    "\" height=\"" + num(H, 0) + "\" viewBox=\"0 0 " + num(W, 0) + " " + num(H, 0) +
+                    "\" role=\"img\" aria-label=\"jiggle angle over time, clip " + esc(clip.clip) + "\">\n";
+  svg += "<text class=\"chart-title\" x=\"" + num(left, 0) + "\" y=\"16\">" + esc(clip.clip) + "</text>\n<g class=\"axis\">";
+  const double step = hi > 40 ? 15 : hi > 12 ? 5 : hi > 4 ? 1 : 0.5;
+  for (double g = 0; g <= hi + 1e-9; g += step) {
+    svg += "<line class=\"grid\" x1=\"" + num(left, 1) + "\" y1=\"" + num(Y(g), 1) + "\" x2=\"" + num(W - right, 1) +
+           "\" y2=\"" + num(Y(g), 1) + "\"/><text x=\"" + num(left - 5, 1) + "\" y=\"" + num(Y(g) + 4, 1) +
+           "\" text-anchor=\"end\">" + num(g, step < 1 ? 1 : 0) + "&#176;</text>";
+  }
+  svg += "<line x1=\"" + num(left, 1) + "\" y1=\"" + num(H - bottom, 1) + "\" x2=\"" + num(W - right, 1) + "\" y2=\"" +
+         num(H - bottom, 1) + "\"/>";
+  svg += "<text x=\"" + num(left, 1) + "\" y=\"" + num(H - bottom + 16, 1) + "\">" + num(t0, 2) + " s</text>";
+  svg += "<text x=\"" + num(W - right, 1) + "\" y=\"" + num(H - bottom + 16, 1) + "\" text-anchor=\"end\">" + num(t1, 2) +
+         " s</text></g>\n<g class=\"series\">";
+  for (size_t j = 0; j < clip.jiggles.size(); ++j) {
+    const JiggleSeries& series = clip.jiggles[j];
+    const std::string colour = kColours[j % 8];
+    std::string angle, clamp;
+    for (size_t t = 0; t < clip.times.size() && t < series.angle_deg.size() && t < series.clamp_deg.size(); ++t) {
+      angle += (t ? " " : "") + num(X(clip.times[t]), 1) + "," + num(Y(series.angle_deg[t]), 1);
+      clamp += (t ? " " : "") + num(X(clip.times[t]), 1) + "," + num(Y(series.clamp_deg[t]), 1);
+    }
+    svg += "<polyline points=\"" + clamp + "\" stroke=\"" + colour + "\" stroke-dasharray=\"5 3\"><title>" +
+           esc(series.joint) + " cone half-angle</title></polyline>";
+    svg += "<polyline points=\"" + angle + "\" stroke=\"" + colour + "\"><title>" + esc(series.joint) +
+           " angle</title></polyline>";
+  }
+  svg += "</g>\n<g class=\"legend\">";
+  for (size_t j = 0; j < clip.jiggles.size() && j < 8; ++j) {
+    const double y = top + 4 + 12.0 * static_cast<double>(j);
+    svg += "<line x1=\"" + num(W - right - 150, 1) + "\" y1=\"" + num(y, 1) + "\" x2=\"" + num(W - right - 136, 1) +
+           "\" y2=\"" + num(y, 1) + "\" stroke=\"" + kColours[j % 8] + "\" stroke-width=\"2\"/><text x=\"" +
+           num(W - right - 132, 1) + "\" y=\"" + num(y + 4, 1) + "\">" + esc(clip.jiggles[j].joint) + "</text>";
+  }
+  svg += "</g>\n</svg>\n";
+  return svg;
+}
+
 // ---- Histogram, deformation bars ----
 
 std::string histogramChart(const Report& report) {
@@ -496,6 +554,7 @@ svg.view { background: #fbfbfc; border: 1px solid #eceef1; border-radius: 6px; }
 .band { fill: #2e7d32; opacity: .12; } .band-outer { fill: #2e7d32; opacity: .05; }
 .band-label { fill: #2e7d32; font-size: 10px; }
 .series polyline { fill: none; stroke-width: 1.6; opacity: .85; }
+.legend text { font-size: 10px; fill: var(--ink); }
 .outside circle { fill: var(--fail); }
 .callout circle { fill: var(--ink); } .callout text { font-weight: 600; fill: var(--ink); }
 .histogram .ok { fill: #30638e; } .histogram .over { fill: var(--fail); } .histogram .count { fill: var(--ink); }
@@ -555,6 +614,15 @@ std::string reportHtml(const Report& report) {
     html += "</div>\n";
   }
   html += "</section>\n";
+
+  if (!report.jiggles.empty()) {
+    html += "<section id=\"jiggles\"><h2>Jiggle angle over time</h2>\n<p class=\"explain\">Angle of each baked jiggle "
+            "from its animated direction (solid) against its elliptical cone's half-angle in that direction (dashed): "
+            "the clamp holds where the solid line stays under its dashed twin (JIGGLE_WITHIN_CLAMP).</p>\n"
+            "<div class=\"grid\">\n";
+    for (const ClipJiggles& clip : report.jiggles) html += jiggleChart(clip);
+    html += "</div>\n</section>\n";
+  }
 
   html += "<div class=\"row\">\n<section id=\"influences\"><h2>Influences per vertex</h2>\n<p class=\"explain\">How "
           "many joints carry non-zero weight on each vertex (WEIGHTS_n); red bars exceed the INFLUENCE_COUNT "

@@ -55,6 +55,17 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
     }
     ratios.push_back({{"clip", clip.clip}, {"times", clip.times}, {"muscles", muscles}});
   }
+  nlohmann::ordered_json jiggles = nlohmann::ordered_json::array();
+  for (const ClipJiggles& clip : report.jiggles) {
+    nlohmann::ordered_json series_list = nlohmann::ordered_json::array();
+    for (const JiggleSeries& series : clip.jiggles) {
+      nlohmann::ordered_json angles = nlohmann::ordered_json::array(), clamps = nlohmann::ordered_json::array();
+      for (double a : series.angle_deg) angles.push_back(number(a));
+      for (double c : series.clamp_deg) clamps.push_back(number(c));
+      series_list.push_back({{"joint", series.joint}, {"host", series.host}, {"angle_deg", angles}, {"clamp_deg", clamps}});
+    }
+    jiggles.push_back({{"clip", clip.clip}, {"times", clip.times}, {"jiggles", series_list}});
+  }
   nlohmann::ordered_json deformation = nlohmann::ordered_json::array();
   for (const ClipDeformation& clip : report.deformation) {
     deformation.push_back({{"clip", clip.clip},
@@ -90,7 +101,8 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
        {{"muscle_ratio", ratios},
         {"influence_histogram", report.influence_histogram},
         {"packed_deformation", deformation},
-        {"memory_table", memory}}},
+        {"memory_table", memory},
+        {"jiggle_angle", jiggles}}},
   };
 }
 

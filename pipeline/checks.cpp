@@ -75,6 +75,8 @@ const std::vector<CheckDefinition>& checkDefinitions() {
        "Most non-zero influences on one vertex"},
       {"PACKED_DEFORMATION_ERROR", Severity::kError, 0.0005, Comparison::kAtMost, "m",
        "Largest displacement between skinning with the packed weights and with WEIGHTS_n, over every clip sample"},
+      {"JIGGLE_WITHIN_CLAMP", Severity::kError, 1e-6, Comparison::kAtMost, "deg",
+       "Largest amount by which a baked jiggle's angle exceeds its cone's half-angle, over every clip sample"},
       {"GLTF_STRUCTURE", Severity::kError, 0.0, Comparison::kAtMost, "issues",
        "Structural problems: accessor counts and types, skins, muscle joint nodes and their animation"},
       {"KHRONOS_VALIDATOR", Severity::kError, 0.0, Comparison::kAtMost, "errors",
@@ -415,6 +417,35 @@ CheckResult checkMuscleRatioInRange(const ValidationInputs& inputs, const std::v
   return result;
 }
 
+CheckResult checkJiggleWithinClamp(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("JIGGLE_WITHIN_CLAMP", config);
+  if (inputs.file->jiggles.empty()) return skipped(result, "the file has no baked jiggle (bake --jiggle)");
+  Measurement measurement(&result);
+  int samples = 0, jiggles = 0;
+  for (const ClipJiggles& clip : inputs.file->jiggles) {
+    for (const JiggleSeries& series : clip.jiggles) {
+      ++jiggles;
+      double worst = std::numeric_limits<double>::lowest();
+      size_t worst_t = 0;
+      for (size_t t = 0; t < series.angle_deg.size() && t < series.clamp_deg.size(); ++t) {
+        const double over = series.angle_deg[t] - series.clamp_deg[t];
+        if (over > worst) {
+          worst = over;
+          worst_t = t;
+        }
+        ++samples;
+      }
+      if (series.angle_deg.empty() || worst_t >= clip.times.size()) continue;
+      measurement.add(worst, series.joint + " @ " + clip.clip,
+                      "angle " + fixed(series.angle_deg[worst_t], 4) + " deg at t=" + fixed(clip.times[worst_t], 3) +
+                          " s, cone half-angle there " + fixed(series.clamp_deg[worst_t], 4) + " deg");
+    }
+  }
+  measurement.finish(std::to_string(jiggles) + " jiggle tracks (" + std::to_string(samples) +
+                     " samples), largest excess over the cone " + fixed(result.measured, 6) + " deg");
+  return result;
+}
+
 CheckResult checkWeightsSum(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("WEIGHTS_SUM", config);
   if (inputs.file->skins.empty()) return skipped(result, "the file has no skinned primitive with JOINTS_0/WEIGHTS_0");
@@ -739,6 +770,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.deformation = packedDeformationPerClip(character, file);
   report.influence_histogram = influenceHistogram(file);
   report.memory = skinMemoryTable(report.vertices);
+  report.jiggles = file.jiggles;
 
   report.checks.push_back(checkLandmarksResolved(inputs, config));
   report.checks.push_back(checkLocatorSymmetry(inputs, config));
@@ -749,6 +781,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkJointIndexInRange(inputs, config));
   report.checks.push_back(checkInfluenceCount(inputs, config));
   report.checks.push_back(checkPackedDeformationError(inputs, report.deformation, config));
+  report.checks.push_back(checkJiggleWithinClamp(inputs, config));
   report.checks.push_back(checkGltfStructure(inputs, config));
   report.checks.push_back(checkKhronosValidator(inputs, config));
   assert(report.checks.size() == checkDefinitions().size());

@@ -105,8 +105,26 @@ struct FileIssue {
   std::string message;
 };
 
+// A baked jiggle's angle from its animated direction and its cone's half-angle in that direction,
+// degrees, at each sample time, as the bake recorded them in the animation's extras (the animated
+// direction itself is no longer in the file once the jiggle replaced the channels).
+struct JiggleSeries {
+  std::string joint;
+  std::string host;  // "joint" or "muscle"
+  std::vector<double> angle_deg;
+  std::vector<double> clamp_deg;
+};
+
+struct ClipJiggles {
+  std::string clip;
+  std::string pointer;  // "/animations/A/extras/rigbake"
+  std::vector<double> times;
+  std::vector<JiggleSeries> jiggles;
+};
+
 struct BakedFileData {
   std::vector<FileSkinAttributes> skins;
+  std::vector<ClipJiggles> jiggles;
   std::vector<FileMuscleNode> muscle_nodes;
   std::vector<FileIssue> structure;  // structural problems found while reading
 };
@@ -193,6 +211,7 @@ struct Report {
   std::vector<std::int64_t> influence_histogram;  // [n] = vertices with n non-zero influences
   std::vector<ClipDeformation> deformation;
   std::vector<SkinLayoutSize> memory;
+  std::vector<ClipJiggles> jiggles;  // empty when the bake had no --jiggle
 
   // True when every check at error severity passed or was skipped.
   bool passed() const;

@@ -7,7 +7,8 @@ kind="${1:-release}"
 case "$kind" in
   release) dir="$repo/build"; args=(-DCMAKE_BUILD_TYPE=Release) ;;
   debug) dir="$repo/build-debug"; args=(-DCMAKE_BUILD_TYPE=Debug) ;;
-  asan) dir="$repo/build-asan"; args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DRIGBAKE_SANITIZE=ON) ;;
+  # -O1 -g1: line tables for the sanitizers' stack traces, at half the compile time of -O2 -g.
+  asan) dir="$repo/build-asan"; args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" -DRIGBAKE_SANITIZE=ON) ;;
   *) echo "usage: scripts/build.sh [release|debug|asan]" >&2; exit 1 ;;
 esac
 cmake -S "$repo" -B "$dir" -G Ninja -DRIGBAKE_WERROR=ON "${args[@]}" >/dev/null

@@ -13,6 +13,7 @@
 #include "formats/gltf_document.h"
 #include "formats/sample_gltf.h"
 #include "test_support.h"
+#include "glb_support.h"
 
 using namespace rigbake;
 namespace ext = rigbake::test::external;
@@ -40,14 +41,6 @@ tinygltf::Model smallSampleModel(SampleVrm vrm = SampleVrm::kNone) {
   options.target_vertices = kMinSampleVertices;
   options.vrm = vrm;
   return sampleToGltf(makeSampleCharacter(options));
-}
-
-// The GLB's JSON chunk, parsed.
-nlohmann::json glbJson(const std::string& glb) {
-  REQUIRE(glb.size() >= 20);
-  uint32_t json_length = readU32(glb, 12);
-  REQUIRE(20 + json_length <= glb.size());
-  return nlohmann::json::parse(glb.substr(20, json_length));
 }
 
 std::set<std::string> asSet(const std::vector<std::string>& items) { return {items.begin(), items.end()}; }
@@ -123,7 +116,7 @@ TEST_CASE("GLB output is one well-formed container with one BIN chunk") {
   CHECK(readU32(glb, bin_header + 4) == 0x004E4942u);  // "BIN\0"
   CHECK(bin_length % 4 == 0);
   CHECK(bin_header + 8 + bin_length == glb.size());
-  nlohmann::json json = glbJson(glb);
+  nlohmann::json json = test::glbJson(glb);
   REQUIRE(json["buffers"].size() == 1);
   CHECK_FALSE(json["buffers"][0].contains("uri"));
   CHECK(json["buffers"][0]["byteLength"].get<size_t>() <= bin_length);

@@ -17,11 +17,13 @@
 #include "pipeline/jiggle.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/pose.h"
+#include "math_fixture.h"
 
 namespace rigbake {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using test::kPi;
+using test::maxDifference;
 
 bool verbose() { return std::getenv("RIGBAKE_TEST_VERBOSE") != nullptr; }
 

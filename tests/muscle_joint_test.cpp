@@ -2,29 +2,20 @@
 
 #include <cmath>
 
+#include "anatomy/placement.h"
 #include "formats/gltf_document.h"
 #include "test_support.h"
+#include "math_fixture.h"
 
 using namespace rigbake;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-double maxDifference(const Eigen::Affine3d& a, const Eigen::Affine3d& b) {
-  return (a.matrix() - b.matrix()).cwiseAbs().maxCoeff();
-}
+using test::kPi;
+using test::maxDifference;
 
 double degreesBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi;
-}
-
-MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector3d& world) {
-  MuscleLocator locator;
-  locator.world = world;
-  locator.joint = joint;
-  locator.local = skeleton.bind_world[joint].inverse() * world;
-  return locator;
 }
 
 // A part as the placement stage would hand it over; the driver rides the origin joint.

@@ -6,12 +6,14 @@
 
 #include "formats/gltf_document.h"
 #include "test_support.h"
+#include "math_fixture.h"
 
 using namespace rigbake;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using test::kPi;
+using test::maxDifference;
 
 Track makeTrack(AnimatedPath path, Interpolation interpolation, std::vector<double> times, std::vector<double> values) {
   Track track;
@@ -34,10 +36,6 @@ void checkQuaternion(const Eigen::Quaterniond& q, const std::vector<double>& xyz
   CHECK(q.y() == Approx(xyzw[1]).margin(margin));
   CHECK(q.z() == Approx(xyzw[2]).margin(margin));
   CHECK(q.w() == Approx(xyzw[3]).margin(margin));
-}
-
-double maxDifference(const Eigen::Affine3d& a, const Eigen::Affine3d& b) {
-  return (a.matrix() - b.matrix()).cwiseAbs().maxCoeff();
 }
 
 // A two-joint chain under a non-joint node that is rotated and moved, bind pose = rest pose.
