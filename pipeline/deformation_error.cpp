@@ -8,6 +8,7 @@
 #include <map>
 
 #include "anatomy/error.h"
+#include "pipeline/pose.h"
 
 namespace rigbake {
 
@@ -25,7 +26,7 @@ Eigen::Vector3d skinnedPosition(const Eigen::Vector3d& p, const InfluenceSet& se
     if (joint < 0 || joint >= static_cast<int>(skin_matrices.size()))
       fail("INTERNAL", "", "vertex " + std::to_string(vertex) + " names joint " + std::to_string(joint) +
                                " but there are " + std::to_string(skin_matrices.size()) + " skin matrices");
-    offset += weight * (skin_matrices[joint] * p - p);
+    offset += weight * (transformPoint(skin_matrices[joint], p) - p);
   }
   return p + offset;
 }

@@ -11,6 +11,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "pipeline/pose.h"
+
 namespace rigbake {
 namespace {
 
@@ -74,7 +76,7 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
     Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n, n);
     std::vector<Eigen::Vector3d> moved(n);
     for (const SkinFrame& frame : frames) {
-      for (int i = 0; i < n; ++i) moved[i] = frame[joints[i]] * bind_positions[v];
+      for (int i = 0; i < n; ++i) moved[i] = transformPoint(frame[joints[i]], bind_positions[v]);
       for (int i = 1; i < n; ++i) {
         const Eigen::Vector3d di = moved[i] - moved[0];
         for (int j = i; j < n; ++j) gram(i, j) += di.dot(moved[j] - moved[0]);
