@@ -30,7 +30,8 @@ struct PackedInfluences {
   std::vector<std::uint8_t> indices;
 };
 
-// True for the influence counts the talk's formats define: 4, 7, 10.
+// The influence counts the talk's formats define, and a test for them.
+constexpr int kPackedInfluenceCounts[] = {4, 7, 10};
 bool isPackedInfluenceCount(int influences);
 // ceil((N - 1) / 3): 1, 2, 3 words for N = 4, 7, 10.
 int packedWeightWords(int influences);

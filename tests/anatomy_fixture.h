@@ -18,17 +18,22 @@ struct Resolved {
   LandmarkSet landmarks;
 };
 
-inline Resolved resolveShipped(const std::string& path, const NamingMap* forced = nullptr) {
+// Landmarks of `character` from the shipped naming maps and rules (or `forced`).
+inline Resolved resolveWithShippedPresets(Character character, const NamingMap* forced = nullptr) {
   static const std::vector<NamingMap> maps = readNamingMaps(presetsDir() + "/skeletons");
   static const LandmarkRules rules = readLandmarkRules(presetsDir() + "/landmarks.json");
   Resolved resolved;
-  resolved.character = loadCharacter(path).character;
+  resolved.character = std::move(character);
   LandmarkInputs inputs;
   inputs.maps = &maps;
   inputs.rules = &rules;
   inputs.forced_map = forced;
   resolved.landmarks = resolveLandmarks(resolved.character, inputs);
   return resolved;
+}
+
+inline Resolved resolveShipped(const std::string& path, const NamingMap* forced = nullptr) {
+  return resolveWithShippedPresets(loadCharacter(path).character, forced);
 }
 
 inline const MusclePreset& gowPreset() {
@@ -64,6 +69,16 @@ inline std::string sampleGlbPath(SampleVrm vrm = SampleVrm::kNone) {
   };
   static const RemovedAtExit plain(SampleVrm::kNone), vrm0(SampleVrm::kVrm0), vrm1(SampleVrm::kVrm1);
   return vrm == SampleVrm::kNone ? plain.path : vrm == SampleVrm::kVrm0 ? vrm0.path : vrm1.path;
+}
+
+// The sample, then every shared asset (missing ones fail under CI=true, see requireAsset).
+inline std::vector<std::string> sampleAndAssetPaths() {
+  std::vector<std::string> paths = {sampleGlbPath()};
+  for (const std::string& name : sharedAssetNames()) {
+    std::string path = requireAsset(name);
+    if (!path.empty()) paths.push_back(path);
+  }
+  return paths;
 }
 
 }  // namespace rigbake::test

@@ -15,11 +15,7 @@ namespace ext = rigbake::test::external;
 TEST_CASE("bake: Blender imports every baked file with the muscle bones and their vertex groups") {
   if (!ext::requireTool(ext::onPath("blender"), "blender (Debian package blender)")) return;
   test::TempDir dir;
-  std::vector<std::string> inputs = {test::sampleGlbPath()};
-  for (const std::string& name : test::sharedAssetNames()) {
-    std::string path = test::requireAsset(name);
-    if (!path.empty()) inputs.push_back(path);
-  }
+  std::vector<std::string> inputs = test::sampleAndAssetPaths();
   std::vector<std::string> baked_paths;
   std::vector<std::vector<std::string>> expected_bones;
   for (size_t i = 0; i < inputs.size(); ++i) {

@@ -6,11 +6,7 @@
 using namespace rigbake;
 
 TEST_CASE("bake: split vertices at a seam get identical muscle weights") {
-  std::vector<std::string> paths = {test::sampleGlbPath()};
-  for (const std::string& name : test::sharedAssetNames()) {
-    std::string path = test::requireAsset(name);
-    if (!path.empty()) paths.push_back(path);
-  }
+  std::vector<std::string> paths = test::sampleAndAssetPaths();
   for (const std::string& path : paths) {
     INFO(path);
     test::Resolved r = test::resolveShipped(path);

@@ -42,11 +42,7 @@ BakedCharacter bakeFile(const std::string& path, int influences) {
 }
 
 std::vector<std::string> characterPaths() {
-  std::vector<std::string> paths = {test::sampleGlbPath()};
-  for (const std::string& name : test::sharedAssetNames()) {
-    std::string path = test::requireAsset(name);
-    if (!path.empty()) paths.push_back(path);
-  }
+  std::vector<std::string> paths = test::sampleAndAssetPaths();
   return paths;
 }
 

@@ -34,17 +34,17 @@ void copyFile(const std::string& from, const std::string& to) {
 }
 
 // A project folder `sub` with hero.glb and manifest.json (outputs to sub/out): hero, the sample, placed
-// from the preset; cesium, CesiumMan, muscles retargeted from hero; soldier, the Quaternius soldier at
-// 7 influences. `extra` characters are appended as given. Returns the manifest's path.
+// from the preset; cesium, CesiumMan, muscles retargeted from hero; kaykit, the KayKit mannequin (a
+// .gltf whose buffers are separate files, which the content hash must cover) at 7 influences. `extra` characters are appended as given. Returns the manifest's path.
 std::string writeManifest(const test::TempDir& dir, const std::string& sub, const nlohmann::json& extra = nlohmann::json::array()) {
   fs::create_directories(dir / sub);
   copyFile(test::sampleGlbPathForCli(), dir / (sub + "/hero.glb"));
   nlohmann::json characters = nlohmann::json::array();
   characters.push_back({{"name", "hero"}, {"input", "hero.glb"}});
   const std::string cesium = test::requireAsset("CesiumMan.glb");
-  const std::string soldier = test::requireAsset("Quaternius_ModularWomen_Soldier.glb");
+  const std::string kaykit = test::requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
   if (!cesium.empty()) characters.push_back({{"name", "cesium"}, {"input", cesium}, {"muscles_from", "hero"}});
-  if (!soldier.empty()) characters.push_back({{"name", "soldier"}, {"input", soldier}, {"influences", 7}});
+  if (!kaykit.empty()) characters.push_back({{"name", "kaykit"}, {"input", kaykit}, {"influences", 7}});
   for (const auto& c : extra) characters.push_back(c);
   const nlohmann::json manifest = {{"preset", "gow_biped"}, {"influences", 10}, {"out", "out"}, {"characters", characters}};
   const std::string path = dir / (sub + "/manifest.json");
@@ -150,14 +150,14 @@ TEST_CASE("cli build: outputs are byte-identical whatever -j, and unchanged char
   REQUIRE(runCli("build " + ext::shellQuote(parallel)).exit_code == 0);
   CHECK(statusOf(summaryOf(dir / "parallel/out"), "hero") == "up-to-date");
 
-  // A different hero rebuilds hero; the soldier, which does not depend on it, stays up to date.
+  // A different hero rebuilds hero; the KayKit mannequin, which does not depend on it, stays up to date.
   REQUIRE(runCli("sample --vertices 4000 -o " + ext::shellQuote(dir / "parallel/hero.glb")).exit_code == 0);
   test::CliResult changed = runCli("build " + ext::shellQuote(parallel));
   INFO(changed.err);
   REQUIRE(changed.exit_code == 0);
   summary = summaryOf(dir / "parallel/out");
   CHECK(statusOf(summary, "hero") == "built");
-  if (statusOf(summary, "soldier") != "absent") CHECK(statusOf(summary, "soldier") == "up-to-date");
+  if (statusOf(summary, "kaykit") != "absent") CHECK(statusOf(summary, "kaykit") == "up-to-date");
   CHECK(slurp(dir / "parallel/out/hero/hero.glb") != parallel_files.at("hero/hero.glb"));
 }
 

@@ -1,4 +1,5 @@
 #include "pipeline/influences.h"
+#include "pipeline/pack_influences.h"
 
 #include <cmath>
 #include <functional>
@@ -15,8 +16,6 @@
 using namespace rigbake;
 
 namespace {
-
-constexpr int kBudgets[] = {4, 7, 10};
 
 // Counts broken vertices and keeps the first one's story, so a property over 30,000 vertices costs one
 // assertion per mesh part instead of one per vertex.
@@ -132,7 +131,7 @@ TEST_CASE("pruning keeps the largest weights, breaks ties by joint index and ren
       std::map<int, int> pruned_vertices;
       for (const test::PartInfluences& part : asset.parts) {
         for (const InfluenceSet* input : {&part.real, &part.wide}) {
-          for (int budget : kBudgets) {
+          for (int budget : kPackedInfluenceCounts) {
             INFO(part.name << (input == &part.wide ? " (widened)" : "") << " N=" << budget);
             InfluenceSet pruned = pruneInfluences(*input, budget);
             REQUIRE(pruned.slots_per_vertex == budget);
@@ -178,7 +177,7 @@ TEST_CASE("pruning keeps the largest weights, breaks ties by joint index and ren
         }
       }
       INFO(asset.asset);
-      for (int budget : kBudgets) CHECK(pruned_vertices[budget] > 0);
+      for (int budget : kPackedInfluenceCounts) CHECK(pruned_vertices[budget] > 0);
     }
   }
 }
@@ -206,7 +205,7 @@ TEST_CASE("0.001 quantization sums to exactly 1000 by largest remainder on every
       std::map<int, int> pruned_vertices;
       for (const test::PartInfluences& part : asset.parts) {
         for (const InfluenceSet* input : {&part.real, &part.wide}) {
-          for (int budget : kBudgets) {
+          for (int budget : kPackedInfluenceCounts) {
             INFO(part.name << (input == &part.wide ? " (widened)" : "") << " N=" << budget);
             InfluenceSet pruned = pruneInfluences(*input, budget);
             QuantizedInfluences q = quantizeInfluences(pruned);
@@ -285,7 +284,7 @@ TEST_CASE("glTF JOINTS_n/WEIGHTS_n sum to exactly 255 or 65535 with legal joints
       const int joint_count = asset.skeleton.size();
       for (const test::PartInfluences& part : asset.parts) {
         for (const InfluenceSet* input : {&part.real, &part.wide}) {
-          for (int budget : kBudgets) {
+          for (int budget : kPackedInfluenceCounts) {
             QuantizedInfluences q = quantizeInfluences(pruneInfluences(*input, budget));
             for (WeightStorage storage : {WeightStorage::kUnsignedByte, WeightStorage::kUnsignedShort}) {
               const bool bytes = storage == WeightStorage::kUnsignedByte;
@@ -436,7 +435,7 @@ QuantizationFigures measureQuantization(const test::AssetInfluences& asset, bool
 TEST_CASE("0.001 weights move no vertex of a shared asset by 0.1 mm per metre of character height") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     const double tolerance = 1e-4 * asset.height;  // 0.1 mm for every metre of height
-    for (int budget : kBudgets) {
+    for (int budget : kPackedInfluenceCounts) {
       INFO(asset.asset << " N=" << budget << " height " << asset.height);
       QuantizationFigures figures = measureQuantization(asset, false, budget);
       // At the bind pose every skin matrix is the identity: no weight change can move a vertex.
@@ -460,7 +459,7 @@ TEST_CASE("every vertex's quantization error stays within the bound largest rema
     std::vector<Eigen::Affine3d> pose = test::randomPoseSkinMatrices(asset.skeleton, 7001u, 30.0);
     for (const test::PartInfluences& part : asset.parts) {
       for (const InfluenceSet* input : {&part.real, &part.wide}) {
-        for (int budget : kBudgets) {
+        for (int budget : kPackedInfluenceCounts) {
           INFO(part.name << (input == &part.wide ? " (widened)" : "") << " N=" << budget);
           InfluenceSet pruned = pruneInfluences(*input, budget);
           InfluenceSet quantized = dequantizeInfluences(quantizeInfluences(pruned));
@@ -498,7 +497,7 @@ TEST_CASE("deformation error figures", "[.figures]") {
                "max mm | rms mm\n";
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (bool widened : {false, true}) {
-      for (int budget : kBudgets) {
+      for (int budget : kPackedInfluenceCounts) {
         QuantizationFigures f = measureQuantization(asset, widened, budget);
         std::cout << asset.asset << " | " << (widened ? "widened" : "file") << " | " << budget << " | "
                   << asset.height << " | " << f.posed.max_displacement * 1000 << " | "
@@ -513,7 +512,7 @@ TEST_CASE("deformation error figures", "[.figures]") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
       for (const InfluenceSet* input : {&part.real, &part.wide}) {
-        for (int budget : kBudgets) {
+        for (int budget : kPackedInfluenceCounts) {
           QuantizedInfluences q = quantizeInfluences(pruneInfluences(*input, budget));
           InfluenceSet q16 = dequantizeInfluences(requantizeInfluences(q, kUnsignedShortScale));
           largest = std::max(largest, maxWeightDifference(dequantizeInfluences(q), q16));

@@ -29,11 +29,7 @@ void expectSameMuscles(const MuscleSet& a, const MuscleSet& b, double tolerance)
 
 TEST_CASE("muscle JSON round-trips through the rigbake block on every character") {
   test::TempDir dir;
-  std::vector<std::string> paths = {test::sampleGlbPath()};
-  for (const std::string& name : test::sharedAssetNames()) {
-    std::string path = test::requireAsset(name);
-    if (!path.empty()) paths.push_back(path);
-  }
+  std::vector<std::string> paths = test::sampleAndAssetPaths();
   for (const std::string& path : paths) {
     INFO(path);
     test::Resolved r = test::resolveShipped(path);

@@ -9,20 +9,12 @@ namespace {
 
 // The sample character with its joints renamed into another convention.
 test::Resolved renamed(const std::map<std::string, std::string>& names, const NamingMap* forced = nullptr) {
-  static const std::vector<NamingMap> maps = readNamingMaps(test::presetsDir() + "/skeletons");
-  static const LandmarkRules rules = readLandmarkRules(test::presetsDir() + "/landmarks.json");
-  test::Resolved r;
-  r.character = loadCharacter(test::sampleGlbPath()).character;
-  for (std::string& name : r.character.skeleton.names) {
+  Character character = loadCharacter(test::sampleGlbPath()).character;
+  for (std::string& name : character.skeleton.names) {
     auto it = names.find(name);
     name = it == names.end() ? "extra_" + name : it->second;
   }
-  LandmarkInputs inputs;
-  inputs.maps = &maps;
-  inputs.rules = &rules;
-  inputs.forced_map = forced;
-  r.landmarks = resolveLandmarks(r.character, inputs);
-  return r;
+  return test::resolveWithShippedPresets(std::move(character), forced);
 }
 
 void expectJoint(const test::Resolved& r, const std::string& landmark, const std::string& joint) {

@@ -20,7 +20,6 @@ using namespace rigbake;
 
 namespace {
 
-constexpr int kBudgets[] = {4, 7, 10};
 
 std::string errorCodeOf(const std::function<void()>& action) {
   try {
@@ -119,7 +118,7 @@ TEST_CASE("decode(pack(w)) is the 0.001 weights exactly, on every vertex, at 4, 
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
       for (const InfluenceSet* input : {&part.real, &part.wide}) {
-        for (int budget : kBudgets) {
+        for (int budget : kPackedInfluenceCounts) {
           QuantizedInfluences q = quantizeInfluences(pruneInfluences(*input, budget));
           for (int index_bytes : {1, 2}) {
             INFO(part.name << (input == &part.wide ? " (widened)" : "") << " N=" << budget << " index bytes "
@@ -151,7 +150,7 @@ TEST_CASE("decode(pack(w)) is the 0.001 weights exactly, on every vertex, at 4, 
 TEST_CASE("the glTF carrier is legal custom attributes that hold the packed bytes unchanged") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
-      for (int budget : kBudgets) {
+      for (int budget : kPackedInfluenceCounts) {
         QuantizedInfluences q = quantizeInfluences(pruneInfluences(part.wide, budget));
         for (int index_bytes : {1, 2}) {
           INFO(part.name << " N=" << budget << " index bytes " << index_bytes);
@@ -409,7 +408,7 @@ TEST_CASE("the Khronos validator accepts the standard and the packed attributes 
     for (const test::PartInfluences& candidate : asset.parts) {
       if (candidate.positions.size() > part->positions.size()) part = &candidate;
     }
-    for (int budget : kBudgets) {
+    for (int budget : kPackedInfluenceCounts) {
       for (WeightStorage storage : {WeightStorage::kUnsignedByte, WeightStorage::kUnsignedShort}) {
         INFO(part->name << " N=" << budget << (storage == WeightStorage::kUnsignedByte ? " u8" : " u16"));
         QuantizedInfluences q = quantizeInfluences(pruneInfluences(part->wide, budget));

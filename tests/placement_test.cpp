@@ -10,11 +10,7 @@ using namespace rigbake;
 namespace {
 
 std::vector<std::string> allCharacterPaths() {
-  std::vector<std::string> paths = {test::sampleGlbPath()};
-  for (const std::string& name : test::sharedAssetNames()) {
-    std::string path = test::requireAsset(name);
-    if (!path.empty()) paths.push_back(path);
-  }
+  std::vector<std::string> paths = test::sampleAndAssetPaths();
   return paths;
 }
 

@@ -89,11 +89,7 @@ inline std::shared_ptr<ValidatedBake> loadValidatedBake(const std::string& glb, 
 }
 
 inline std::vector<std::string> validateCharacterPaths() {
-  std::vector<std::string> paths = {sampleGlbPath()};
-  for (const std::string& name : sharedAssetNames()) {
-    std::string path = requireAsset(name);
-    if (!path.empty()) paths.push_back(path);
-  }
+  std::vector<std::string> paths = sampleAndAssetPaths();
   return paths;
 }
 
