@@ -1,6 +1,5 @@
 // `rigbake bake CHAR --muscles muscles.json -o baked.glb`: muscle joints, their animation and skin
 // weights into a new glTF, with the deformation error and memory figures of the chosen influence count.
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -79,14 +78,6 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const MuscleSet& mus
   };
 }
 
-// A jiggle preset by file path, or by name under presets/jiggle/.
-JigglePreset loadJigglePreset(const PresetOptions& presets, const std::string& name_or_path) {
-  if (std::ifstream(name_or_path).good()) return readJigglePreset(name_or_path);
-  const std::string shipped = presetsDirectory(presets) + "/jiggle/" + name_or_path + ".json";
-  if (name_or_path.find('/') == std::string::npos && std::ifstream(shipped).good()) return readJigglePreset(shipped);
-  return readJigglePreset(name_or_path);  // throws IO_FILE_NOT_FOUND naming the path as given
-}
-
 bool isVrm(const tinygltf::Model& model) {
   return model.extensions.count("VRMC_vrm") > 0 || model.extensions.count("VRM") > 0;
 }
@@ -115,7 +106,7 @@ int run(const BakeCommandOptions& options) {
   bake_options.fps = options.fps;
   if (!options.jiggle.empty()) {
     bake_options.jiggles =
-        resolveJiggles(loadJigglePreset(options.presets, options.jiggle), character.skeleton, &resolved.landmarks, &muscles);
+        resolveJiggles(readJigglePreset(presetFile(options.presets, "jiggle", options.jiggle)), character.skeleton, &resolved.landmarks, &muscles);
   } else if (!options.hits.empty()) {
     fail("USAGE", "--hits", "needs --jiggle: hits kick jiggle joints");
   }

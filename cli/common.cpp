@@ -27,12 +27,16 @@ namespace {
 bool exists(const std::string& path) { return std::ifstream(path).good(); }
 }  // namespace
 
-MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path) {
-  if (exists(name_or_path)) return readMusclePreset(name_or_path);
-  std::string shipped = presetsDirectory(options) + "/muscles/" + name_or_path + ".json";
-  if (exists(shipped)) return readMusclePreset(shipped);
+std::string presetFile(const PresetOptions& options, const std::string& kind, const std::string& name_or_path) {
+  if (exists(name_or_path)) return name_or_path;
+  std::string shipped = presetsDirectory(options) + "/" + kind + "/" + name_or_path + ".json";
+  if (exists(shipped)) return shipped;
   fail("IO_FILE_NOT_FOUND", name_or_path, "no such preset file, and no shipped preset of that name in " +
-                                              presetsDirectory(options) + "/muscles/");
+                                              presetsDirectory(options) + "/" + kind + "/");
+}
+
+MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path) {
+  return readMusclePreset(presetFile(options, "muscles", name_or_path));
 }
 
 ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options) {

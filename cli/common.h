@@ -19,6 +19,9 @@ struct PresetOptions {
 void addPresetOptions(CLI::App* command, PresetOptions* options);
 std::string presetsDirectory(const PresetOptions& options);
 
+// A preset file by path, or by name under presets/KIND/ (muscles, jiggle); IO_FILE_NOT_FOUND otherwise.
+std::string presetFile(const PresetOptions& options, const std::string& kind, const std::string& name_or_path);
+
 // A muscle preset by file path, or by name under presets/muscles/.
 MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path);
 

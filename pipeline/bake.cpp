@@ -72,8 +72,8 @@ JiggleTrack simulateMuscleJiggle(const JiggleSetup& setup, const MuscleSet& musc
 // Every jiggle of one clip, in setup order; a muscle jiggle's track also replaces its skinned joint's
 // samples (and skin matrices) so the file and the deformation figures see the jiggled joint.
 std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& muscles, const Clip& clip,
-                                     const BakeOptions& options, const BakeResult& result, BakedClip* baked,
-                                     std::vector<SkinFrame>* frames) {
+                                     const std::vector<Pose>& poses, const BakeOptions& options,
+                                     const BakeResult& result, BakedClip* baked, std::vector<SkinFrame>* frames) {
   std::vector<JiggleTrack> skeleton_tracks = simulateJiggle(skeleton, clip, baked->times, options.jiggles, options.hits);
   std::vector<JiggleTrack> tracks;
   size_t next_skeleton_track = 0;
@@ -87,8 +87,7 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
     const MusclePart& part = muscles.parts[setup.muscle];
     for (size_t t = 0; t < baked->times.size(); ++t) {
       baked->local[t][joint] = track.local[t];
-      const Pose pose = sampleClip(skeleton, clip, baked->times[t]);
-      const Eigen::Affine3d world = pose.world[parentOf(part, MuscleJointRole::kSkinned)] * track.local[t].matrix();
+      const Eigen::Affine3d world = poses[t].world[parentOf(part, MuscleJointRole::kSkinned)] * track.local[t].matrix();
       (*frames)[t][skeleton.size() + setup.muscle] = world * result.joints[joint].bind_world.inverse();
     }
     tracks.push_back(std::move(track));
@@ -170,8 +169,10 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.name = clip.name;
     baked.times = sampleTimes(clip, options.fps);
     std::vector<SkinFrame> frames;
+    std::vector<Pose> poses;  // kept for the jiggles only
     for (double time : baked.times) {
       const Pose pose = sampleClip(skeleton, clip, time);
+      if (!options.jiggles.empty()) poses.push_back(pose);
       std::vector<Trs> locals;
       std::vector<double> ratios;
       SkinFrame skin(skeleton.size() + muscle_count);
@@ -187,7 +188,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
-    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, muscles, clip, options, result, &baked, &frames);
+    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, muscles, clip, poses, options, result, &baked, &frames);
     clip_frames.push_back(std::move(frames));
     result.clips.push_back(std::move(baked));
   }
