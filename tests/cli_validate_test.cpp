@@ -74,7 +74,7 @@ TEST_CASE("cli validate: a good bake passes, exit 0, with report.json, report.ju
   CHECK(files == 3);
 }
 
-TEST_CASE("cli validate: a muscle locator 1 m off fails LOCATOR_NEAR_SURFACE with exit code 4") {
+TEST_CASE("cli validate: a muscle locator 1 m off fails LOCATOR_NEAR_SURFACE with exit code 1") {
   const CliBake& bake = cliBake();
   test::TempDir out;
   nlohmann::json muscles = nlohmann::json::parse(slurp(bake.muscles));
