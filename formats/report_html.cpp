@@ -315,13 +315,14 @@ std::string jiggleChart(const ClipJiggles& clip) {
   if (clip.jiggles.empty() || clip.times.empty()) return "";
   static const char* kColours[] = {"#d1495b", "#00798c", "#e08e0b", "#30638e", "#3c9d5d", "#8f2d56", "#6a4c93", "#b5651d"};
   const double W = 560, H = 230, left = 46, right = 14, top = 26, bottom = 30;
-  double hi = 1.0;
+  double largest_angle = 0.0, largest_clamp = 0.0;
   for (const JiggleSeries& series : clip.jiggles) {
-    for (double a : series.angle_deg) hi = std::max(hi, a);
-    // A 90-degree cone would flatten small swings; the axis follows the motion, up to the cone.
-    for (double c : series.clamp_deg) hi = std::max(hi, std::min(c, 1.5 * hi));
+    for (double a : series.angle_deg) largest_angle = std::max(largest_angle, a);
+    for (double c : series.clamp_deg) largest_clamp = std::max(largest_clamp, c);
   }
-  hi = std::min(90.0, hi * 1.1);
+  // A 90-degree cone would flatten swings of a few degrees: the axis follows the motion and shows a
+  // cone only when it comes near (dashed lines above the top are drawn at the top).
+  const double hi = std::min(90.0, 1.1 * std::max({1.0, largest_angle, std::min(largest_clamp, 1.5 * largest_angle + 1.0)}));
   const double t0 = clip.times.front(), t1 = clip.times.back();
   auto X = [&](double t) { return t1 > t0 ? left + (t - t0) / (t1 - t0) * (W - left - right) : (W + left - right) / 2; };
   auto Y = [&](double a) { return top + (hi - std::min(a, hi)) / hi * (H - top - bottom); };
