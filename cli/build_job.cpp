@@ -68,12 +68,9 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
   std::vector<std::string> files = {character.input, character.preset};
   if (!character.muscles.empty()) files.push_back(character.muscles);
   if (!character.muscles_from.empty()) {
-    for (const BuildCharacter& source : manifest.characters) {
-      if (source.name == character.muscles_from) {
-        files.push_back(source.input);
-        files.push_back(characterOutputs(manifest, source).muscles);
-      }
-    }
+    const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
+    files.push_back(source.input);
+    files.push_back(characterOutputs(manifest, source).muscles);
   }
   return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
                                 std::to_string(character.influences) + " muscles_from " + character.muscles_from);
@@ -105,12 +102,18 @@ void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobO
 
 }  // namespace
 
-JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& character) {
-  CharacterOutputs out = characterOutputs(manifest, character);
-  std::ifstream in(out.stamp);
-  if (!in) return failedJob(character, "not built (no " + out.stamp + ")");
-  nlohmann::json stamp = nlohmann::json::parse(in, nullptr, false);
-  if (!stamp.is_object()) return failedJob(character, "unreadable build stamp " + out.stamp);
+namespace {
+
+// The stamp a previous run left beside the character's outputs; discarded when missing or unreadable.
+nlohmann::json readStamp(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return nlohmann::json(nlohmann::json::value_t::discarded);
+  return nlohmann::json::parse(in, nullptr, false);
+}
+
+JobOutcome outcomeFromStamp(const BuildCharacter& character, const std::string& path, const nlohmann::json& stamp) {
+  if (stamp.is_discarded()) return failedJob(character, "not built (no readable " + path + ")");
+  if (!stamp.is_object()) return failedJob(character, "unreadable build stamp " + path);
   JobOutcome outcome;
   outcome.name = character.name;
   std::string status = stamp.value("status", "failed");
@@ -120,6 +123,13 @@ JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& c
   return outcome;
 }
 
+}  // namespace
+
+JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& character) {
+  const std::string path = characterOutputs(manifest, character).stamp;
+  return outcomeFromStamp(character, path, readStamp(path));
+}
+
 JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
                            bool force) {
   const CharacterOutputs out = characterOutputs(manifest, character);
@@ -127,9 +137,8 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
   try {
     hash = inputsHash(manifest, character);
     if (!force) {
-      JobOutcome previous = readJobOutcome(manifest, character);
-      std::ifstream stamp_file(out.stamp);
-      nlohmann::json stamp = nlohmann::json::parse(stamp_file, nullptr, false);
+      const nlohmann::json stamp = readStamp(out.stamp);
+      JobOutcome previous = outcomeFromStamp(character, out.stamp, stamp);
       bool outputs_exist = true;
       for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html})
         outputs_exist &= std::filesystem::exists(path);
@@ -146,15 +155,13 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     if (!character.muscles.empty()) {
       muscles = readMuscleJson(character.muscles, body, loaded.landmarks, preset);
     } else if (!character.muscles_from.empty()) {
-      const BuildCharacter* source = nullptr;
-      for (const BuildCharacter& c : manifest.characters) {
-        if (c.name == character.muscles_from) source = &c;
-      }
-      Loaded from = loadResolved(source->input, presets);
+      const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
+      const std::string source_muscles_path = characterOutputs(manifest, source).muscles;
+      Loaded from = loadResolved(source.input, presets);
       MuscleSet source_muscles =
-          readMuscleJson(characterOutputs(manifest, *source).muscles, from.character.character, from.landmarks, preset);
+          readMuscleJson(source_muscles_path, from.character.character, from.landmarks, preset);
       muscles = retargetMuscles(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks, preset,
-                                characterOutputs(manifest, *source).muscles);
+                                source_muscles_path);
     } else {
       muscles = placeMuscles(body, loaded.landmarks, preset, Sides::kBoth);
     }

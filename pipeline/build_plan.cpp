@@ -7,14 +7,15 @@
 #include "anatomy/error.h"
 
 namespace rigbake {
-namespace {
 
-int indexOf(const BuildManifest& manifest, const std::string& name) {
+int characterIndex(const BuildManifest& manifest, const std::string& name) {
   for (size_t i = 0; i < manifest.characters.size(); ++i) {
     if (manifest.characters[i].name == name) return static_cast<int>(i);
   }
   return -1;
 }
+
+namespace {
 
 // Ninja's escaping for paths in build lines: '$', ' ' and ':' are escaped with '$'.
 std::string ninjaPath(const std::string& path) {
@@ -47,7 +48,7 @@ std::vector<int> buildOrder(const BuildManifest& manifest) {
       chain.push_back(at);
       const BuildCharacter& c = manifest.characters[at];
       if (c.muscles_from.empty()) break;
-      int source = indexOf(manifest, c.muscles_from);
+      int source = characterIndex(manifest, c.muscles_from);
       if (source < 0)
         fail("MANIFEST_INVALID", manifest.file + "#" + c.pointer + "/muscles_from",
              "no character named '" + c.muscles_from + "' in the manifest");
@@ -68,7 +69,7 @@ std::string buildGroup(const BuildManifest& manifest, int character) {
   int at = character;
   for (size_t guard = 0; guard <= manifest.characters.size(); ++guard) {
     const std::string& from = manifest.characters[at].muscles_from;
-    int source = from.empty() ? -1 : indexOf(manifest, from);
+    int source = from.empty() ? -1 : characterIndex(manifest, from);
     if (source < 0) break;
     at = source;
   }
@@ -115,7 +116,7 @@ std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_
     text += " " + ninjaPath(c.preset);
     if (!c.muscles.empty()) text += " " + ninjaPath(c.muscles);
     if (!c.muscles_from.empty()) {
-      const BuildCharacter& source = manifest.characters[indexOf(manifest, c.muscles_from)];
+      const BuildCharacter& source = manifest.characters[characterIndex(manifest, c.muscles_from)];
       text += " " + ninjaPath(characterOutputs(manifest, source).muscles) + " " + ninjaPath(source.input);
     }
     text += " | " + ninjaPath(manifest_path) + "\n  name = " + c.name + "\n";

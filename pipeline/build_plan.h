@@ -27,6 +27,9 @@ struct BuildManifest {
   std::vector<BuildCharacter> characters;
 };
 
+// Index of the character named `name` in manifest.characters, or -1.
+int characterIndex(const BuildManifest& manifest, const std::string& name);
+
 // Characters in an order where every muscles_from source comes before its dependents (ties: manifest
 // order). Throws Error MANIFEST_INVALID on an unknown or cyclic muscles_from, naming the pointer.
 std::vector<int> buildOrder(const BuildManifest& manifest);
