@@ -42,10 +42,24 @@ nlohmann::json errorJson(const DeformationError& error) {
   return {{"max", error.max_displacement * 1000.0}, {"rms", error.rms_displacement * 1000.0}};
 }
 
-nlohmann::json statsJson(const BakeCommandOptions& options, const MuscleSet& muscles, const BakeResult& bake) {
+// Where to look in the input file: the glTF mesh, primitive and vertex, and when in which clip.
+nlohmann::json peakJson(const Character& character, const BakedClip& clip) {
+  if (clip.peak.vertex < 0) return nullptr;
+  const MeshPart& mesh = character.meshes[clip.peak.mesh_part];
+  return {{"clip", clip.name},          {"time_s", clip.peak.time},
+          {"mesh", mesh.name},          {"gltf_mesh", mesh.gltf_mesh},
+          {"primitive", mesh.gltf_primitive}, {"vertex", clip.peak.vertex}};
+}
+
+nlohmann::json statsJson(const BakeCommandOptions& options, const Character& character, const MuscleSet& muscles,
+                         const BakeResult& bake) {
   nlohmann::json per_clip = nlohmann::json::object();
-  for (const BakedClip& clip : bake.clips) per_clip[clip.name] = errorJson(clip.error);
+  for (const BakedClip& clip : bake.clips) {
+    per_clip[clip.name] = errorJson(clip.error);
+    per_clip[clip.name]["worst"] = peakJson(character, clip);
+  }
   nlohmann::json error = errorJson(bake.error);
+  error["worst"] = bake.peak_clip < 0 ? nlohmann::json() : peakJson(character, bake.clips[bake.peak_clip]);
   error["per_clip"] = per_clip;
 
   int gltf_bytes = 0, packed_bytes = 0;
@@ -115,7 +129,7 @@ int run(const BakeCommandOptions& options) {
   BakeOptions baked_motion = bake_options;
   if (options.springs_only) baked_motion.jiggles.clear();
   BakeResult bake = bakeCharacter(character, muscles, baked_motion);
-  nlohmann::json stats = statsJson(options, muscles, bake);
+  nlohmann::json stats = statsJson(options, character, muscles, bake);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
   tinygltf::Model model = bakedModel(*resolved.loaded.document, character, muscles, bake);
@@ -138,6 +152,12 @@ int run(const BakeCommandOptions& options) {
             << stats["deformation_error_mm"]["rms"].get<double>() << " mm; skin data "
             << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
             << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
+  if (bake.peak_clip >= 0) {
+    const BakedClip& clip = bake.clips[bake.peak_clip];
+    std::cerr << std::setprecision(3) << "largest error at vertex " << clip.peak.vertex << " of mesh '"
+              << character.meshes[clip.peak.mesh_part].name << "' in clip '" << clip.name << "' at " << clip.peak.time
+              << " s\n";
+  }
   if (!bake_options.jiggles.empty()) {
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()
               << " hits, " << (options.springs_only ? "not baked" : "baked into every clip")

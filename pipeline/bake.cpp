@@ -245,14 +245,18 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // Deformation error of the pruned, quantized weights against the full-precision ones.
   for (size_t c = 0; c < result.clips.size(); ++c) {
     BakedClip& baked = result.clips[c];
-    for (const SkinFrame& skin : clip_frames[c]) {
+    for (size_t t = 0; t < clip_frames[c].size(); ++t) {
       for (size_t a = 0; a < approximations.size(); ++a) {
         const MeshPart& mesh = character.meshes[approximations[a].first];
         DeformationError frame =
-            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, skin);
+            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c][t]);
+        if (frame.max_vertex >= 0 && frame.max_displacement > baked.error.max_displacement)
+          baked.peak = ErrorPeak{approximations[a].first, frame.max_vertex, baked.times[t]};
         baked.error = combineDeformationErrors(baked.error, frame);
       }
     }
+    if (baked.peak.vertex >= 0 && baked.error.max_displacement > result.error.max_displacement)
+      result.peak_clip = static_cast<int>(c);
     result.error = combineDeformationErrors(result.error, baked.error);
   }
   timing.error = lap();

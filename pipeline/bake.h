@@ -43,6 +43,14 @@ struct BakedJoint {
   Eigen::Affine3d bind_world = Eigen::Affine3d::Identity();  // scene world at the bind pose
 };
 
+// Where a deformation error peaks, so a user can look at it: one vertex of a skinned mesh part at one
+// sampled time of a clip.
+struct ErrorPeak {
+  int mesh_part = -1;  // index into Character::meshes; -1 when nothing moved
+  int vertex = -1;     // index into that part's vertices
+  double time = 0.0;   // seconds into the clip
+};
+
 struct BakedClip {
   int gltf_animation = -1;
   std::string name;
@@ -52,6 +60,8 @@ struct BakedClip {
   // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
   std::vector<std::vector<double>> ratio;
   DeformationError error;  // pruning + quantization against full-precision weights, metres
+  ErrorPeak peak;          // where error.max_displacement is reached (error.max_vertex counts every
+                           // frame's vertices in turn, so it is not an index into a mesh)
   // One track per BakeOptions::jiggles entry, in that order, sampled at `times`. A muscle jiggle's
   // local TRS is already in `local` (its skinned joint); a skeleton joint's replaces the clip's own
   // channels of that joint.
@@ -76,6 +86,7 @@ struct BakeResult {
   std::vector<BakedPart> parts;
   int vertex_count = 0;  // skinned vertices written
   DeformationError error;  // over every clip
+  int peak_clip = -1;      // the clip whose peak is error.max_displacement; -1 when nothing moved
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).

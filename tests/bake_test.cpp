@@ -206,3 +206,37 @@ TEST_CASE("bake: the muscles' share of the weights comes from the joints they sp
     }
   }
 }
+
+TEST_CASE("bake: each clip's reported peak is the vertex and time where the rounded skin moves most") {
+  for (const BakedCharacter& baked : bakedAtTen()) {
+    const Character& character = baked.loaded.character;
+    const Skeleton& skeleton = character.skeleton;
+    REQUIRE(baked.bake.clips.size() == character.clips.size());
+    for (size_t c = 0; c < character.clips.size(); ++c) {
+      const BakedClip& clip = baked.bake.clips[c];
+      INFO(baked.path << " clip " << clip.name);
+      REQUIRE(clip.peak.vertex >= 0);
+      // Skin matrices at the peak's time, skeleton indices then muscles, as the bake defines them.
+      const Pose pose = sampleClip(skeleton, character.clips[c], clip.peak.time);
+      std::vector<Eigen::Affine3d> skin;
+      for (int j = 0; j < skeleton.size(); ++j) skin.push_back(skinMatrix(pose, skeleton, j));
+      for (size_t m = 0; m < baked.muscles.parts.size(); ++m) {
+        const BakedJoint& joint = baked.bake.joints[baked.bake.skinned_joint_of_muscle[m]];
+        skin.push_back(evaluateMuscle(baked.muscles.parts[m], skeleton, pose).skinned * joint.bind_world.inverse());
+      }
+      double largest = 0.0, at_peak = -1.0;
+      for (const BakedPart& part : baked.bake.parts) {
+        QuantizedInfluences rounded = part.quantized;  // skin-local joints back to skeleton indices
+        for (size_t k = 0; k < rounded.joints.size(); ++k) rounded.joints[k] = part.skin_joints[rounded.joints[k]];
+        const std::vector<double> moved = skinningDisplacements(character.meshes[part.mesh_part].positions, part.full,
+                                                                dequantizeInfluences(rounded), skin);
+        largest = std::max(largest, *std::max_element(moved.begin(), moved.end()));
+        if (part.mesh_part == clip.peak.mesh_part) at_peak = moved[clip.peak.vertex];
+      }
+      CHECK(at_peak == Approx(clip.error.max_displacement).epsilon(1e-9));
+      CHECK(largest == Approx(clip.error.max_displacement).epsilon(1e-9));
+    }
+    if (baked.bake.peak_clip >= 0)
+      CHECK(baked.bake.clips[baked.bake.peak_clip].error.max_displacement == baked.bake.error.max_displacement);
+  }
+}

@@ -22,7 +22,8 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
                        (dir / "stats.json") + " --packed-out " + (dir / "baked.rbpk"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  CHECK(lineCount(r.err) == 1);  // the summary line
+  CHECK(lineCount(r.err) == 2);  // the summary line and where the largest error is
+  CHECK(r.err.find("largest error at vertex ") != std::string::npos);
   nlohmann::json stats = nlohmann::json::parse(slurp(dir / "stats.json"));
   CHECK(stats["influences"] == 10);
   CHECK(stats["muscle_joints"] == 28);
@@ -36,6 +37,18 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
   // 10 influences at 0.001: the worst vertex over every frame moves less than a fifth of a millimetre.
   CHECK(stats["deformation_error_mm"]["max"].get<double>() < 0.2);
   CHECK(stats["deformation_error_mm"]["rms"].get<double>() < 0.01);
+  // Where: the worst clip's own peak, on the sample's single mesh, inside its 2 s clips.
+  const nlohmann::json& worst = stats["deformation_error_mm"]["worst"];
+  REQUIRE(worst.is_object());
+  CHECK(worst == stats["deformation_error_mm"]["per_clip"][worst["clip"].get<std::string>()]["worst"]);
+  CHECK(stats["deformation_error_mm"]["per_clip"][worst["clip"].get<std::string>()]["max"] ==
+        stats["deformation_error_mm"]["max"]);
+  CHECK(worst["gltf_mesh"] == 0);
+  CHECK(worst["primitive"] == 0);
+  CHECK(worst["vertex"].get<int>() >= 0);
+  CHECK(worst["vertex"].get<int>() < stats["vertices"].get<int>());
+  CHECK(worst["time_s"].get<double>() >= 0.0);
+  CHECK(worst["time_s"].get<double>() <= 2.0);
   // Skin data per vertex: u16 weights + u8 joints in 3 sets of 4 = 36 B; packed 10 = 3 words + 10 u8 -> 24 B.
   CHECK(stats["bytes_per_vertex"]["gltf"] == 36);
   CHECK(stats["bytes_per_vertex"]["packed"] == 24);
