@@ -13,9 +13,11 @@ namespace rigbake {
 using SkinFrame = std::vector<Eigen::Affine3d>;
 
 // Like quantizeInfluences(set, 1000): every weight is rounded down or up to a multiple of 0.001 and
-// each vertex sums to exactly 1000. Of the roundings that do so, it picks per vertex the one whose
-// linear-blend skinning error, summed in squares over `frames`, is smallest (largest-remainder
-// rounding wins ties, and is what an empty `frames` gives). Canonical slot order as in influences.h.
+// each vertex sums to exactly 1000. Of the roundings that do so, each vertex takes the one whose
+// linear-blend skinning error, summed in squares over `frames`, is smallest (largest-remainder rounding
+// wins ties, and is what an empty `frames` gives); vertices whose error then comes within half of the
+// worst vertex's take the one with the smallest worst frame instead, so that the worst vertex is as
+// good as such roundings allow. Canonical slot order as in influences.h.
 QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                       const std::vector<SkinFrame>& frames);
 

@@ -1,7 +1,8 @@
 // How low 0.001 weights can take the deformation error at all. Issue 4 sets a goal of 0.1 mm at 10
 // influences; these tests show on the shared assets' own weights and own clips (no muscles, nothing of
 // rigbake's weighting) that some vertices cannot get there with any 0.001 rounding of their weights,
-// and that rigbake's rounding is close to the best one there is at those vertices.
+// that rigbake's worst vertex is as good as any rounding keeping each weight within 0.001 allows, and
+// that it is close to the best rounding there is at all.
 //
 // The search is exhaustive: a rounding whose worst frame stays under E has a mean squared error under
 // E^2, so every candidate lies inside the ellipsoid (q - x)^T G (q - x) < F E^2 (F frames, G the Gram
@@ -12,6 +13,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -132,6 +134,24 @@ Floor roundingFloor(const VertexMotion& motion, double ceiling) {
   return floor;
 }
 
+// The least worst-frame error over the roundings that take each share down or up, by trying them all.
+double bestDownOrUp(const VertexMotion& motion) {
+  const int n = static_cast<int>(motion.joints.size());
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<int> units(n);
+  for (unsigned mask = 0; mask < (1u << n); ++mask) {
+    int sum = 0;
+    bool possible = true;
+    for (int i = 0; i < n; ++i) {
+      units[i] = static_cast<int>(std::floor(motion.exact[i])) + static_cast<int>((mask >> i) & 1u);
+      possible = possible && !(((mask >> i) & 1u) && motion.exact[i] == std::floor(motion.exact[i]));
+      sum += units[i];
+    }
+    if (possible && sum == kMilliScale) best = std::min(best, worstFrame(motion, units));
+  }
+  return best;
+}
+
 // Skin matrices at every key time of every clip.
 std::vector<SkinFrame> clipFrames(const Character& character) {
   std::vector<SkinFrame> frames;
@@ -184,6 +204,15 @@ TEST_CASE("0.001 weights cannot keep every vertex within 0.1 mm: the floor on th
         if (worst > kGoalMetres) worst_first.emplace_back(worst, v);
       }
       std::sort(worst_first.rbegin(), worst_first.rend());
+      // No rounding that keeps every weight within 0.001 does better than rigbake's on this part: the
+      // part's worst is the largest per-vertex best, and a vertex rigbake keeps under the largest best
+      // found so far cannot raise it.
+      double optimum = 0.0;
+      for (const auto& [worst, v] : worst_first) {
+        if (worst <= optimum) break;
+        optimum = std::max(optimum, bestDownOrUp(vertexMotion(exact, v, mesh.positions[v], frames)));
+      }
+      if (!worst_first.empty()) CHECK(worst_first.front().first == Approx(optimum).epsilon(1e-12));
       // The worst vertices first: the first one no rounding brings under 0.1 mm settles the question.
       for (size_t i = 0; i < worst_first.size() && i < 40 && !proven; ++i) {
         const int v = worst_first[i].second;
@@ -206,8 +235,9 @@ TEST_CASE("0.001 weights cannot keep every vertex within 0.1 mm: the floor on th
     INFO(name << ": vertex " << proven_vertex);
     REQUIRE(proven);
     CHECK(proven_floor >= kGoalMetres);
-    // rigbake's rounding there is within 25% of the best 0.001 rounding that exists.
-    CHECK(rigbake_there <= 1.25 * proven_floor);
+    // rigbake's rounding there, which keeps each weight within 0.001, is within 5% of the best 0.001
+    // rounding that exists at all.
+    CHECK(rigbake_there <= 1.05 * proven_floor);
   }
 }
 
