@@ -55,7 +55,7 @@ struct VertexMotion {
   std::vector<double> exact;
   std::vector<int> floor_units;
   int missing = 0;  // thousandths still to hand out after rounding every share down
-  std::vector<std::vector<Eigen::Vector3d>> moved;  // [frame][joint]
+  std::vector<Eigen::Vector3d> moved;  // frame-major: moved[t * joints.size() + i]
 };
 
 VertexMotion vertexMotion(const InfluenceSet& set, int v, const Eigen::Vector3d& position,
@@ -85,9 +85,9 @@ VertexMotion vertexMotion(const InfluenceSet& set, int v, const Eigen::Vector3d&
   }
   motion.missing = kMilliScale - handed;
   if (n <= 1 || motion.missing <= 0 || motion.missing >= n) return motion;  // nothing to choose
-  motion.moved.assign(frames.size(), std::vector<Eigen::Vector3d>(n));
-  for (size_t t = 0; t < frames.size(); ++t)
-    for (int i = 0; i < n; ++i) motion.moved[t][i] = transformPoint(frames[t][motion.joints[i]], position);
+  motion.moved.reserve(frames.size() * n);
+  for (const SkinFrame& frame : frames)
+    for (int joint : motion.joints) motion.moved.push_back(transformPoint(frame[joint], position));
   return motion;
 }
 
@@ -125,7 +125,8 @@ std::vector<unsigned> candidateMasks(const VertexMotion& motion) {
 unsigned leastSquaresMask(const VertexMotion& motion, const std::vector<unsigned>& masks) {
   const int n = static_cast<int>(motion.joints.size());
   Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(n, n);
-  for (const auto& moved : motion.moved) {
+  for (size_t at = 0; at < motion.moved.size(); at += n) {
+    const Eigen::Vector3d* moved = &motion.moved[at];
     for (int i = 1; i < n; ++i) {
       const Eigen::Vector3d di = moved[i] - moved[0];
       for (int j = i; j < n; ++j) gram(i, j) += di.dot(moved[j] - moved[0]);
@@ -133,10 +134,9 @@ unsigned leastSquaresMask(const VertexMotion& motion, const std::vector<unsigned
   }
   for (int i = 1; i < n; ++i)
     for (int j = i + 1; j < n; ++j) gram(j, i) = gram(i, j);
+  Eigen::VectorXd error(n);
   auto cost = [&](unsigned mask) {
-    const std::vector<int> units = unitsOf(motion, mask);
-    Eigen::VectorXd error(n);
-    for (int i = 0; i < n; ++i) error[i] = units[i] - motion.exact[i];
+    for (int i = 0; i < n; ++i) error[i] = motion.floor_units[i] + ((mask >> i) & 1u) - motion.exact[i];
     return error.dot(gram * error);
   };
   unsigned best = masks.front();
@@ -157,7 +157,8 @@ unsigned leastSquaresMask(const VertexMotion& motion, const std::vector<unsigned
 double worstFrameError(const VertexMotion& motion, const std::vector<int>& units,
                        double give_up = std::numeric_limits<double>::infinity()) {
   double worst = 0.0;
-  for (const auto& moved : motion.moved) {
+  for (size_t at = 0; at < motion.moved.size(); at += units.size()) {
+    const Eigen::Vector3d* moved = &motion.moved[at];
     Eigen::Vector3d error = Eigen::Vector3d::Zero();
     for (size_t i = 0; i < units.size(); ++i) error += (units[i] - motion.exact[i]) * moved[i];
     worst = std::max(worst, error.norm() / kMilliScale);
