@@ -73,7 +73,8 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
     files.push_back(characterOutputs(manifest, source).muscles);
   }
   return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
-                                std::to_string(character.influences) + " muscles_from " + character.muscles_from);
+                                std::to_string(character.influences) + " gltf_weights " +
+                                gltfWeightsName(character.gltf_weights) + " muscles_from " + character.muscles_from);
 }
 
 // Validates the written model against its muscle file and writes the three reports; returns how many
@@ -168,6 +169,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     muscles.character = character.name + ".glb";
     BakeOptions options;
     options.influences = character.influences;
+    options.gltf_weights = character.gltf_weights;
     BakeResult bake = bakeCharacter(body, muscles, options);
     std::string model = serializeGltf(bakedModel(*loaded.character.document, body, muscles, bake), true);
     writeFileAtomically(out.muscles, muscleJson(muscles, body.skeleton, preset.name));

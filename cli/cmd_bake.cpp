@@ -33,6 +33,7 @@ struct BakeCommandOptions {
   std::string hits;
   bool springs_only = false;
   int influences = 4;
+  std::string gltf_weights = "milli";
   double fps = 0.0;
   bool json = false;
   PresetOptions presets;
@@ -43,25 +44,32 @@ nlohmann::json errorJson(const DeformationError& error) {
 }
 
 // Where to look in the input file: the glTF mesh, primitive and vertex, and when in which clip.
-nlohmann::json peakJson(const Character& character, const BakedClip& clip) {
-  if (clip.peak.vertex < 0) return nullptr;
-  const MeshPart& mesh = character.meshes[clip.peak.mesh_part];
-  return {{"clip", clip.name},          {"time_s", clip.peak.time},
+nlohmann::json peakJson(const Character& character, const BakedClip& clip, const ErrorPeak& peak) {
+  if (peak.vertex < 0) return nullptr;
+  const MeshPart& mesh = character.meshes[peak.mesh_part];
+  return {{"clip", clip.name},          {"time_s", peak.time},
           {"mesh", mesh.name},          {"gltf_mesh", mesh.gltf_mesh},
-          {"primitive", mesh.gltf_primitive}, {"vertex", clip.peak.vertex}};
+          {"primitive", mesh.gltf_primitive}, {"vertex", peak.vertex}};
+}
+
+// max, rms, worst and per_clip for the 0.001 weights, or with `gltf` for the 1/65535 WEIGHTS_n.
+nlohmann::json deformationJson(const Character& character, const BakeResult& bake, bool gltf) {
+  nlohmann::json per_clip = nlohmann::json::object();
+  for (const BakedClip& clip : bake.clips) {
+    per_clip[clip.name] = errorJson(gltf ? clip.gltf_error : clip.error);
+    per_clip[clip.name]["worst"] = peakJson(character, clip, gltf ? clip.gltf_peak : clip.peak);
+  }
+  const int peak_clip = gltf ? bake.gltf_peak_clip : bake.peak_clip;
+  nlohmann::json error = errorJson(gltf ? bake.gltf_error : bake.error);
+  error["worst"] = peak_clip < 0 ? nlohmann::json()
+                                 : peakJson(character, bake.clips[peak_clip],
+                                            gltf ? bake.clips[peak_clip].gltf_peak : bake.clips[peak_clip].peak);
+  error["per_clip"] = per_clip;
+  return error;
 }
 
 nlohmann::json statsJson(const BakeCommandOptions& options, const Character& character, const MuscleSet& muscles,
                          const BakeResult& bake) {
-  nlohmann::json per_clip = nlohmann::json::object();
-  for (const BakedClip& clip : bake.clips) {
-    per_clip[clip.name] = errorJson(clip.error);
-    per_clip[clip.name]["worst"] = peakJson(character, clip);
-  }
-  nlohmann::json error = errorJson(bake.error);
-  error["worst"] = bake.peak_clip < 0 ? nlohmann::json() : peakJson(character, bake.clips[bake.peak_clip]);
-  error["per_clip"] = per_clip;
-
   int gltf_bytes = 0, packed_bytes = 0;
   if (!bake.parts.empty()) {
     const BakedPart& first = bake.parts.front();
@@ -75,7 +83,7 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
                      {"bytes_per_vertex", layout.bytes_per_vertex},
                      {"total_bytes", layout.total_bytes}});
   }
-  return {
+  nlohmann::json stats = {
       {"character", fileNameOf(options.character)},
       {"output", fileNameOf(options.output)},
       {"units", "m"},
@@ -84,12 +92,15 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
       {"joints_added", bake.joints.size()},
       {"vertices", bake.vertex_count},
       {"clips", bake.clips.size()},
-      {"deformation_error_mm", error},
+      {"deformation_error_mm", deformationJson(character, bake, false)},
+      {"gltf_weights", gltfWeightsName(bake.gltf_weights)},
       {"bytes_per_vertex", {{"gltf", gltf_bytes}, {"packed", packed_bytes}}},
       {"bytes_total", {{"gltf", static_cast<long long>(gltf_bytes) * bake.vertex_count},
                        {"packed", static_cast<long long>(packed_bytes) * bake.vertex_count}}},
       {"memory_table", table},
   };
+  if (bake.gltf_weights == GltfWeights::kUnorm16) stats["gltf_deformation_error_mm"] = deformationJson(character, bake, true);
+  return stats;
 }
 
 bool isVrm(const tinygltf::Model& model) {
@@ -117,6 +128,7 @@ int run(const BakeCommandOptions& options) {
                           : readMuscleJson(options.muscles, character, resolved.landmarks, preset);
   BakeOptions bake_options;
   bake_options.influences = options.influences;
+  parseGltfWeights(options.gltf_weights, &bake_options.gltf_weights);  // CLI11 has checked the name
   bake_options.fps = options.fps;
   if (!options.jiggle.empty()) {
     bake_options.jiggles =
@@ -152,6 +164,12 @@ int run(const BakeCommandOptions& options) {
             << stats["deformation_error_mm"]["rms"].get<double>() << " mm; skin data "
             << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
             << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
+  if (bake.gltf_weights == GltfWeights::kUnorm16) {
+    std::cerr << "WEIGHTS_n in 1/65535 steps: deformation error max "
+              << stats["gltf_deformation_error_mm"]["max"].get<double>() << " mm, rms "
+              << stats["gltf_deformation_error_mm"]["rms"].get<double>() << " mm (the figures above are the packed "
+              << "0.001 weights')\n";
+  }
   if (bake.peak_clip >= 0) {
     const BakedClip& clip = bake.clips[bake.peak_clip];
     std::cerr << std::setprecision(3) << "largest error at vertex " << clip.peak.vertex << " of mesh '"
@@ -184,6 +202,12 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->capture_default_str();
   command->add_option("--influences", options->influences, "Influences per vertex: 4, 7 or 10")
       ->check(CLI::IsMember({4, 7, 10}))
+      ->capture_default_str();
+  command->add_option("--gltf-weights", options->gltf_weights,
+                      "Precision of WEIGHTS_n: milli = the talk's 0.001 steps, the very weights the packed buffers "
+                      "hold; unorm16 = 1/65535 steps, for engines that skin with WEIGHTS_n (same bytes, about a "
+                      "fiftieth of the deformation error; the packed buffers keep 0.001, docs/muscle-weights.md)")
+      ->check(CLI::IsMember({"milli", "unorm16"}))
       ->capture_default_str();
   command->add_option("--fps", options->fps, "Sample clips at this rate (frames per second); 0 = at their own keys")
       ->check(CLI::NonNegativeNumber)

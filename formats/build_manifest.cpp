@@ -48,7 +48,7 @@ std::vector<std::string> referencedFiles(const std::string& gltf_path) {
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", "MANIFEST_INVALID");
-  in.allowKeys({"$schema", "preset", "influences", "out", "characters"});
+  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "out", "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -67,13 +67,19 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     return n;
   };
   if (in.has("influences")) manifest.influences = influencesOf(in.at("influences"));
+  auto gltfWeightsOf = [](const JsonReader& value) {
+    GltfWeights weights = GltfWeights::kMilli;
+    if (!parseGltfWeights(value.asString(), &weights)) value.fail("must be \"milli\" or \"unorm16\"");
+    return weights;
+  };
+  if (in.has("gltf_weights")) manifest.gltf_weights = gltfWeightsOf(in.at("gltf_weights"));
   manifest.out = resolve(manifest.directory, in.has("out") ? in.at("out").asString() : std::string("build"));
   JsonReader characters = in.at("characters");
   if (characters.arraySize() == 0) characters.fail("must list at least one character");
   std::set<std::string> names;
   for (size_t i = 0; i < characters.arraySize(); ++i) {
     JsonReader item = characters.at(i);
-    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences"});
+    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -88,6 +94,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     if (c.muscles_from == c.name && !c.name.empty()) item.at("muscles_from").fail("a character cannot retarget from itself");
     c.preset = item.has("preset") ? presetPath(item.at("preset")) : manifest.preset;
     c.influences = item.has("influences") ? influencesOf(item.at("influences")) : manifest.influences;
+    c.gltf_weights = item.has("gltf_weights") ? gltfWeightsOf(item.at("gltf_weights")) : manifest.gltf_weights;
     manifest.characters.push_back(std::move(c));
   }
   buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work

@@ -105,6 +105,44 @@ InfluenceSet normalized(const InfluenceSet& set) {
   return out;
 }
 
+// Per skinned mesh part (index into Character::meshes), its rounded weights with skeleton indices.
+using Approximations = std::vector<std::pair<int, InfluenceSet>>;
+
+struct ClipErrors {
+  std::vector<DeformationError> per_clip;
+  std::vector<ErrorPeak> peaks;
+  DeformationError overall;
+  int peak_clip = -1;
+};
+
+// How far `approximations` move the skin from the parts' full-precision weights at every sampled frame
+// of every clip, and where each clip's largest move is.
+ClipErrors measureDeformation(const Character& character, const BakeResult& result,
+                              const Approximations& approximations,
+                              const std::vector<std::vector<SkinFrame>>& clip_frames) {
+  ClipErrors errors;
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    DeformationError clip_error;
+    ErrorPeak peak;
+    for (size_t t = 0; t < clip_frames[c].size(); ++t) {
+      for (size_t a = 0; a < approximations.size(); ++a) {
+        const MeshPart& mesh = character.meshes[approximations[a].first];
+        const DeformationError frame =
+            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c][t]);
+        if (frame.max_vertex >= 0 && frame.max_displacement > clip_error.max_displacement)
+          peak = ErrorPeak{approximations[a].first, frame.max_vertex, result.clips[c].times[t]};
+        clip_error = combineDeformationErrors(clip_error, frame);
+      }
+    }
+    if (peak.vertex >= 0 && clip_error.max_displacement > errors.overall.max_displacement)
+      errors.peak_clip = static_cast<int>(c);
+    errors.overall = combineDeformationErrors(errors.overall, clip_error);
+    errors.per_clip.push_back(clip_error);
+    errors.peaks.push_back(peak);
+  }
+  return errors;
+}
+
 }  // namespace
 
 BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options,
@@ -198,7 +236,9 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   // Weights per skinned part.
   const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height);
-  std::vector<std::pair<int, InfluenceSet>> approximations;  // mesh part -> dequantized, skeleton indices
+  const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
+  result.gltf_weights = options.gltf_weights;
+  Approximations milli, fine;  // dequantized, skeleton indices
   for (size_t p = 0; p < character.meshes.size(); ++p) {
     const MeshPart& mesh = character.meshes[p];
     if (!mesh.skinned || mesh.positions.empty()) continue;
@@ -209,10 +249,13 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
     SurfaceGraph surface = buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3));
     baked.full = normalized(addMuscleInfluences(mesh, base, surface, skeleton, muscles, muscle_joints, radii, options.weights));
-    QuantizedInfluences quantized =
-        quantizeForMotion(pruneInfluences(baked.full, options.influences), mesh.positions, all_frames);
+    const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
+    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames);
+    const QuantizedInfluences quantized_fine =
+        unorm16 ? quantizeInfluences(pruned, kUnsignedShortScale) : QuantizedInfluences{};
     timing.weights += lap();
-    approximations.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
+    milli.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
+    if (unorm16) fine.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized_fine));
 
     // Skin-local indices: the file's joint list, then the muscles' skinned joints.
     baked.skin_joints = mesh.skin_joints;
@@ -221,19 +264,23 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     for (size_t k = 0; k < baked.skin_joints.size(); ++k) {
       if (local_of[baked.skin_joints[k]] < 0) local_of[baked.skin_joints[k]] = static_cast<int>(k);
     }
-    baked.quantized = quantized;
-    for (size_t k = 0; k < quantized.joints.size(); ++k) {
-      if (quantized.weights[k] == 0) {
-        baked.quantized.joints[k] = 0;
-        continue;
+    auto skinLocal = [&](QuantizedInfluences influences) {
+      for (size_t k = 0; k < influences.joints.size(); ++k) {
+        if (influences.weights[k] == 0) {
+          influences.joints[k] = 0;
+          continue;
+        }
+        const int local = local_of[influences.joints[k]];
+        if (local < 0)
+          fail("GLTF_SKIN_INVALID", character.source, "mesh '" + mesh.name + "' is weighted to a joint outside its skin");
+        influences.joints[k] = local;
       }
-      int local = local_of[quantized.joints[k]];
-      if (local < 0)
-        fail("GLTF_SKIN_INVALID", character.source, "mesh '" + mesh.name + "' is weighted to a joint outside its skin");
-      baked.quantized.joints[k] = local;
-    }
+      return influences;
+    };
+    baked.quantized = skinLocal(quantized);
     const int skin_size = static_cast<int>(baked.skin_joints.size());
-    baked.standard = standardSkinAttributes(baked.quantized, skin_size, WeightStorage::kUnsignedShort);
+    baked.standard = standardSkinAttributes(unorm16 ? skinLocal(quantized_fine) : baked.quantized, skin_size,
+                                            WeightStorage::kUnsignedShort);
     baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
     baked.packed_attributes = packedGltfAttributes(baked.packed);
     timing.pack += lap();
@@ -243,21 +290,21 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   timing.weights += lap();
   // Deformation error of the pruned, quantized weights against the full-precision ones.
+  const ClipErrors milli_errors = measureDeformation(character, result, milli, clip_frames);
   for (size_t c = 0; c < result.clips.size(); ++c) {
-    BakedClip& baked = result.clips[c];
-    for (size_t t = 0; t < clip_frames[c].size(); ++t) {
-      for (size_t a = 0; a < approximations.size(); ++a) {
-        const MeshPart& mesh = character.meshes[approximations[a].first];
-        DeformationError frame =
-            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c][t]);
-        if (frame.max_vertex >= 0 && frame.max_displacement > baked.error.max_displacement)
-          baked.peak = ErrorPeak{approximations[a].first, frame.max_vertex, baked.times[t]};
-        baked.error = combineDeformationErrors(baked.error, frame);
-      }
+    result.clips[c].error = milli_errors.per_clip[c];
+    result.clips[c].peak = milli_errors.peaks[c];
+  }
+  result.error = milli_errors.overall;
+  result.peak_clip = milli_errors.peak_clip;
+  if (unorm16) {
+    const ClipErrors fine_errors = measureDeformation(character, result, fine, clip_frames);
+    for (size_t c = 0; c < result.clips.size(); ++c) {
+      result.clips[c].gltf_error = fine_errors.per_clip[c];
+      result.clips[c].gltf_peak = fine_errors.peaks[c];
     }
-    if (baked.peak.vertex >= 0 && baked.error.max_displacement > result.error.max_displacement)
-      result.peak_clip = static_cast<int>(c);
-    result.error = combineDeformationErrors(result.error, baked.error);
+    result.gltf_error = fine_errors.overall;
+    result.gltf_peak_clip = fine_errors.peak_clip;
   }
   timing.error = lap();
   return result;

@@ -22,6 +22,7 @@ namespace rigbake {
 
 struct BakeOptions {
   int influences = 4;  // 4, 7 or 10
+  GltfWeights gltf_weights = GltfWeights::kMilli;
   double fps = 0.0;    // 0: sample each clip at its own key times
   MuscleWeightOptions weights;
   // Secondary motion baked into every clip (docs/jiggle.md): setups from resolveJiggles() against
@@ -62,6 +63,9 @@ struct BakedClip {
   DeformationError error;  // pruning + quantization against full-precision weights, metres
   ErrorPeak peak;          // where error.max_displacement is reached (error.max_vertex counts every
                            // frame's vertices in turn, so it is not an index into a mesh)
+  // GltfWeights::kUnorm16 only: the same for the WEIGHTS_n written (with kMilli they are `error`).
+  DeformationError gltf_error;
+  ErrorPeak gltf_peak;
   // One track per BakeOptions::jiggles entry, in that order, sampled at `times`. A muscle jiggle's
   // local TRS is already in `local` (its skinned joint); a skeleton joint's replaces the clip's own
   // channels of that joint.
@@ -87,6 +91,9 @@ struct BakeResult {
   int vertex_count = 0;  // skinned vertices written
   DeformationError error;  // over every clip
   int peak_clip = -1;      // the clip whose peak is error.max_displacement; -1 when nothing moved
+  GltfWeights gltf_weights = GltfWeights::kMilli;
+  DeformationError gltf_error;  // kUnorm16 only, as BakedClip::gltf_error
+  int gltf_peak_clip = -1;
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/influences.h"
+
 namespace rigbake {
 
 struct BuildCharacter {
@@ -15,6 +17,7 @@ struct BuildCharacter {
   std::string muscles;       // a muscle JSON to use, or empty
   std::string preset;        // preset path for this character (manifest default when not given)
   int influences = 10;
+  GltfWeights gltf_weights = GltfWeights::kMilli;
   std::string pointer;       // JSON pointer in the manifest, for messages
 };
 
@@ -23,6 +26,7 @@ struct BuildManifest {
   std::string directory;  // of the manifest; relative paths in it are resolved against this
   std::string preset;
   int influences = 10;
+  GltfWeights gltf_weights = GltfWeights::kMilli;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;
 };

@@ -305,4 +305,18 @@ std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluence
   return attributes;
 }
 
+const char* gltfWeightsName(GltfWeights weights) {
+  return weights == GltfWeights::kUnorm16 ? "unorm16" : "milli";
+}
+
+bool parseGltfWeights(const std::string& name, GltfWeights* weights) {
+  for (GltfWeights candidate : {GltfWeights::kMilli, GltfWeights::kUnorm16}) {
+    if (name == gltfWeightsName(candidate)) {
+      *weights = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace rigbake

@@ -78,6 +78,19 @@ struct VertexAttributeData {
 // 0.001 steps and moves each weight by up to about 1/255.
 enum class WeightStorage { kUnsignedByte, kUnsignedShort };
 
+// Which weights the bake writes as WEIGHTS_n (always UNSIGNED_SHORT). The packed buffers always hold
+// the talk's 0.001 steps.
+enum class GltfWeights {
+  kMilli,    // "milli": the 0.001 weights the packed buffers hold (the talk's precision)
+  kUnorm16,  // "unorm16": the pruned weights rounded to 1/65535, all UNSIGNED_SHORT can hold; for
+             // engines that skin with WEIGHTS_n, the same bytes with about a fiftieth of the error
+};
+
+// "milli" or "unorm16", as --gltf-weights and build manifests spell them.
+const char* gltfWeightsName(GltfWeights weights);
+// False for any other name.
+bool parseGltfWeights(const std::string& name, GltfWeights* weights);
+
 // A skinned mesh part's slots as the loader read them (skeleton joint indices), with zero-weight slots
 // set to joint 0. Weights are left as the file stored them, not renormalized.
 InfluenceSet influencesFromMesh(const MeshPart& part);

@@ -16,6 +16,10 @@ TEST_CASE("bake: Blender imports every baked file with the muscle bones and thei
   if (!ext::requireTool(ext::onPath("blender"), "blender (Debian package blender)")) return;
   test::TempDir dir;
   std::vector<std::string> inputs = test::sampleAndAssetPaths();
+  std::vector<GltfWeights> weights(inputs.size(), GltfWeights::kMilli);
+  // The sample once more with --gltf-weights unorm16.
+  inputs.push_back(inputs.front());
+  weights.push_back(GltfWeights::kUnorm16);
   std::vector<std::string> baked_paths;
   std::vector<std::vector<std::string>> expected_bones;
   for (size_t i = 0; i < inputs.size(); ++i) {
@@ -24,6 +28,7 @@ TEST_CASE("bake: Blender imports every baked file with the muscle bones and thei
     MuscleSet muscles = placeMuscles(loaded.character, r.landmarks, test::gowPreset(), Sides::kBoth);
     BakeOptions options;
     options.influences = 7;
+    options.gltf_weights = weights[i];
     BakeResult bake = bakeCharacter(loaded.character, muscles, options);
     std::string out = dir / ("baked" + std::to_string(i) + ".glb");
     writeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), out);

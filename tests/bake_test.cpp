@@ -27,7 +27,7 @@ struct BakedCharacter {
   std::string bytes;  // the baked GLB
 };
 
-BakedCharacter bakeFile(const std::string& path, int influences) {
+BakedCharacter bakeFile(const std::string& path, int influences, GltfWeights gltf_weights = GltfWeights::kMilli) {
   BakedCharacter baked;
   baked.path = path;
   test::Resolved r = test::resolveShipped(path);
@@ -36,6 +36,7 @@ BakedCharacter bakeFile(const std::string& path, int influences) {
   baked.muscles = placeMuscles(baked.loaded.character, baked.landmarks, test::gowPreset(), Sides::kBoth);
   BakeOptions options;
   options.influences = influences;
+  options.gltf_weights = gltf_weights;
   baked.bake = bakeCharacter(baked.loaded.character, baked.muscles, options);
   baked.bytes = serializeGltf(bakedModel(*baked.loaded.document, baked.loaded.character, baked.muscles, baked.bake), true);
   return baked;
@@ -68,11 +69,14 @@ const ext::ValidationSummary& validatedInput(const std::string& path) {
 TEST_CASE("bake: every baked file passes the Khronos glTF validator with 0 errors, at 4, 7 and 10 influences") {
   if (!ext::requireTool(ext::validatorAvailable(), ext::validatorHint())) return;
   test::TempDir dir;
+  const std::vector<std::pair<int, GltfWeights>> variants = {
+      {4, GltfWeights::kMilli}, {7, GltfWeights::kMilli}, {10, GltfWeights::kMilli}, {10, GltfWeights::kUnorm16}};
   for (const std::string& path : characterPaths()) {
-    for (int influences : {4, 7, 10}) {
-      INFO(path << " at " << influences << " influences");
-      BakedCharacter baked = bakeFile(path, influences);
-      std::string out = dir / ("baked" + std::to_string(influences) + ".glb");
+    for (const auto& [influences, gltf_weights] : variants) {
+      const bool unorm16 = gltf_weights == GltfWeights::kUnorm16;
+      INFO(path << " at " << influences << " influences" << (unorm16 ? ", unorm16 weights" : ""));
+      BakedCharacter baked = bakeFile(path, influences, gltf_weights);
+      std::string out = dir / ("baked" + std::to_string(influences) + (unorm16 ? "u16" : "") + ".glb");
       std::ofstream(out, std::ios::binary) << baked.bytes;
       ext::ValidationSummary summary = ext::validateWithKhronos(out);
       INFO(summary.raw.substr(0, 2000));

@@ -8,6 +8,7 @@
 
 #include "cli_support.h"
 #include "external_tools.h"
+#include "glb_support.h"
 #include "test_support.h"
 
 #include <catch2/catch.hpp>
@@ -161,6 +162,27 @@ TEST_CASE("cli build: outputs are byte-identical whatever -j, and unchanged char
   CHECK(slurp(dir / "parallel/out/hero/hero.glb") != parallel_files.at("hero/hero.glb"));
 }
 
+TEST_CASE("cli build: gltf_weights picks each character's WEIGHTS_n precision, and changing it rebuilds") {
+  test::TempDir dir;
+  const nlohmann::json fine = {{{"name", "fine"}, {"input", "hero.glb"}, {"gltf_weights", "unorm16"}}};
+  const std::string manifest = writeManifest(dir, "p", fine);
+  REQUIRE(runCli("build " + ext::shellQuote(manifest)).exit_code == 0);
+  CHECK(test::largestOffMilliLattice(dir / "p/out/hero/hero.glb") < 1000.0 / 65535.0);
+  CHECK(test::largestOffMilliLattice(dir / "p/out/fine/fine.glb") > 0.1);
+  // The same character at the manifest's default precision is a different build.
+  nlohmann::json edited = nlohmann::json::parse(slurp(manifest));
+  for (auto& character : edited["characters"]) character.erase("gltf_weights");
+  edited["gltf_weights"] = "unorm16";
+  std::ofstream(manifest) << edited.dump(2);
+  test::CliResult again = runCli("build " + ext::shellQuote(manifest));
+  INFO(again.err);
+  REQUIRE(again.exit_code == 0);
+  const nlohmann::json summary = summaryOf(dir / "p/out");
+  CHECK(statusOf(summary, "hero") == "built");
+  CHECK(statusOf(summary, "fine") == "up-to-date");
+  CHECK(test::largestOffMilliLattice(dir / "p/out/hero/hero.glb") > 0.1);
+}
+
 TEST_CASE("cli build: --emit-ninja writes a graph that ninja builds into the same files as a direct build") {
   if (!ext::requireTool(ext::onPath("ninja"), "ninja (Debian package ninja-build)")) return;
   test::TempDir dir;
@@ -226,6 +248,8 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
       {{{"out", "out"}, {"charaters", nlohmann::json::array()}}, "#/charaters"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"muscles_from", "nobody"}}}}}, "nobody"},
       {{{"out", "out"}, {"influences", 5}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/influences"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"gltf_weights", "half"}}}}},
+       "#/characters/0/gltf_weights"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}, {{"name", "a"}, {"input", "hero.glb"}}}}},
        "duplicate"},
   };
