@@ -100,7 +100,9 @@ std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_
                       const std::string& manifest_path) {
   std::string text;
   text += "# Written by `rigbake build --emit-ninja`: one edge per character. Run with `ninja -f FILE`.\n";
-  text += "ninja_required_version = 1.5\n\n";
+  text += "ninja_required_version = 1.5\n";
+  // Ninja's own log goes with the outputs, not into whatever directory ninja is started from.
+  text += "builddir = " + ninjaPath(manifest.out) + "\n\n";
   text += "rule rigbake_character\n";
   text += "  command = " + shellWord(rigbake_command) + " build " + shellWord(manifest_path) + " --character $name\n";
   text += "  description = rigbake $name\n\n";
