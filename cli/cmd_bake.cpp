@@ -52,18 +52,17 @@ nlohmann::json peakJson(const Character& character, const BakedClip& clip, const
           {"primitive", mesh.gltf_primitive}, {"vertex", peak.vertex}};
 }
 
-// max, rms, worst and per_clip for the 0.001 weights, or with `gltf` for the 1/65535 WEIGHTS_n.
-nlohmann::json deformationJson(const Character& character, const BakeResult& bake, bool gltf) {
+// max, rms, worst and per_clip of one set of rounded weights.
+nlohmann::json deformationJson(const Character& character, const BakeResult& bake, const DeformationFigures& figures) {
   nlohmann::json per_clip = nlohmann::json::object();
-  for (const BakedClip& clip : bake.clips) {
-    per_clip[clip.name] = errorJson(gltf ? clip.gltf_error : clip.error);
-    per_clip[clip.name]["worst"] = peakJson(character, clip, gltf ? clip.gltf_peak : clip.peak);
+  for (size_t c = 0; c < bake.clips.size(); ++c) {
+    per_clip[bake.clips[c].name] = errorJson(figures.per_clip[c]);
+    per_clip[bake.clips[c].name]["worst"] = peakJson(character, bake.clips[c], figures.peaks[c]);
   }
-  const int peak_clip = gltf ? bake.gltf_peak_clip : bake.peak_clip;
-  nlohmann::json error = errorJson(gltf ? bake.gltf_error : bake.error);
-  error["worst"] = peak_clip < 0 ? nlohmann::json()
-                                 : peakJson(character, bake.clips[peak_clip],
-                                            gltf ? bake.clips[peak_clip].gltf_peak : bake.clips[peak_clip].peak);
+  nlohmann::json error = errorJson(figures.overall);
+  error["worst"] = figures.peak_clip < 0
+                       ? nlohmann::json()
+                       : peakJson(character, bake.clips[figures.peak_clip], figures.peaks[figures.peak_clip]);
   error["per_clip"] = per_clip;
   return error;
 }
@@ -92,14 +91,14 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
       {"joints_added", bake.joints.size()},
       {"vertices", bake.vertex_count},
       {"clips", bake.clips.size()},
-      {"deformation_error_mm", deformationJson(character, bake, false)},
+      {"deformation_error_mm", deformationJson(character, bake, bake.error)},
       {"gltf_weights", gltfWeightsName(bake.gltf_weights)},
       {"bytes_per_vertex", {{"gltf", gltf_bytes}, {"packed", packed_bytes}}},
       {"bytes_total", {{"gltf", static_cast<long long>(gltf_bytes) * bake.vertex_count},
                        {"packed", static_cast<long long>(packed_bytes) * bake.vertex_count}}},
       {"memory_table", table},
   };
-  if (bake.gltf_weights == GltfWeights::kUnorm16) stats["gltf_deformation_error_mm"] = deformationJson(character, bake, true);
+  if (bake.gltf_weights == GltfWeights::kUnorm16) stats["gltf_deformation_error_mm"] = deformationJson(character, bake, bake.gltf_error);
   return stats;
 }
 
@@ -170,11 +169,11 @@ int run(const BakeCommandOptions& options) {
               << stats["gltf_deformation_error_mm"]["rms"].get<double>() << " mm (the figures above are the packed "
               << "0.001 weights')\n";
   }
-  if (bake.peak_clip >= 0) {
-    const BakedClip& clip = bake.clips[bake.peak_clip];
-    std::cerr << std::setprecision(3) << "largest error at vertex " << clip.peak.vertex << " of mesh '"
-              << character.meshes[clip.peak.mesh_part].name << "' in clip '" << clip.name << "' at " << clip.peak.time
-              << " s\n";
+  if (bake.error.peak_clip >= 0) {
+    const ErrorPeak& peak = bake.error.peaks[bake.error.peak_clip];
+    std::cerr << std::setprecision(3) << "largest error at vertex " << peak.vertex << " of mesh '"
+              << character.meshes[peak.mesh_part].name << "' in clip '" << bake.clips[bake.error.peak_clip].name
+              << "' at " << peak.time << " s\n";
   }
   if (!bake_options.jiggles.empty()) {
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()

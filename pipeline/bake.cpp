@@ -108,19 +108,12 @@ InfluenceSet normalized(const InfluenceSet& set) {
 // Per skinned mesh part (index into Character::meshes), its rounded weights with skeleton indices.
 using Approximations = std::vector<std::pair<int, InfluenceSet>>;
 
-struct ClipErrors {
-  std::vector<DeformationError> per_clip;
-  std::vector<ErrorPeak> peaks;
-  DeformationError overall;
-  int peak_clip = -1;
-};
-
 // How far `approximations` move the skin from the parts' full-precision weights at every sampled frame
 // of every clip, and where each clip's largest move is.
-ClipErrors measureDeformation(const Character& character, const BakeResult& result,
-                              const Approximations& approximations,
-                              const std::vector<std::vector<SkinFrame>>& clip_frames) {
-  ClipErrors errors;
+DeformationFigures measureDeformation(const Character& character, const BakeResult& result,
+                                      const Approximations& approximations,
+                                      const std::vector<std::vector<SkinFrame>>& clip_frames) {
+  DeformationFigures errors;
   for (size_t c = 0; c < result.clips.size(); ++c) {
     DeformationError clip_error;
     ErrorPeak peak;
@@ -290,22 +283,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   timing.weights += lap();
   // Deformation error of the pruned, quantized weights against the full-precision ones.
-  const ClipErrors milli_errors = measureDeformation(character, result, milli, clip_frames);
-  for (size_t c = 0; c < result.clips.size(); ++c) {
-    result.clips[c].error = milli_errors.per_clip[c];
-    result.clips[c].peak = milli_errors.peaks[c];
-  }
-  result.error = milli_errors.overall;
-  result.peak_clip = milli_errors.peak_clip;
-  if (unorm16) {
-    const ClipErrors fine_errors = measureDeformation(character, result, fine, clip_frames);
-    for (size_t c = 0; c < result.clips.size(); ++c) {
-      result.clips[c].gltf_error = fine_errors.per_clip[c];
-      result.clips[c].gltf_peak = fine_errors.peaks[c];
-    }
-    result.gltf_error = fine_errors.overall;
-    result.gltf_peak_clip = fine_errors.peak_clip;
-  }
+  result.error = measureDeformation(character, result, milli, clip_frames);
+  if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames);
   timing.error = lap();
   return result;
 }

@@ -52,6 +52,15 @@ struct ErrorPeak {
   double time = 0.0;   // seconds into the clip
 };
 
+// How far one set of rounded weights moves the skin from the full-precision weights, in metres, over
+// every sampled frame of every clip (per_clip and peaks in BakeResult::clips order).
+struct DeformationFigures {
+  std::vector<DeformationError> per_clip;  // max_vertex there counts every frame's vertices in turn;
+  std::vector<ErrorPeak> peaks;            // the peaks say which part, vertex and time
+  DeformationError overall;
+  int peak_clip = -1;  // the clip holding overall.max_displacement; -1 when nothing moved
+};
+
 struct BakedClip {
   int gltf_animation = -1;
   std::string name;
@@ -60,12 +69,6 @@ struct BakedClip {
   std::vector<std::vector<Trs>> local;
   // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
   std::vector<std::vector<double>> ratio;
-  DeformationError error;  // pruning + quantization against full-precision weights, metres
-  ErrorPeak peak;          // where error.max_displacement is reached (error.max_vertex counts every
-                           // frame's vertices in turn, so it is not an index into a mesh)
-  // GltfWeights::kUnorm16 only: the same for the WEIGHTS_n written (with kMilli they are `error`).
-  DeformationError gltf_error;
-  ErrorPeak gltf_peak;
   // One track per BakeOptions::jiggles entry, in that order, sampled at `times`. A muscle jiggle's
   // local TRS is already in `local` (its skinned joint); a skeleton joint's replaces the clip's own
   // channels of that joint.
@@ -89,11 +92,10 @@ struct BakeResult {
   std::vector<BakedClip> clips;
   std::vector<BakedPart> parts;
   int vertex_count = 0;  // skinned vertices written
-  DeformationError error;  // over every clip
-  int peak_clip = -1;      // the clip whose peak is error.max_displacement; -1 when nothing moved
+  // Pruning + 0.001 rounding: the packed buffers' weights (and WEIGHTS_n' with GltfWeights::kMilli).
+  DeformationFigures error;
   GltfWeights gltf_weights = GltfWeights::kMilli;
-  DeformationError gltf_error;  // kUnorm16 only, as BakedClip::gltf_error
-  int gltf_peak_clip = -1;
+  DeformationFigures gltf_error;  // GltfWeights::kUnorm16 only: the 1/65535 WEIGHTS_n
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).
