@@ -195,20 +195,20 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
   // Pass 2 on the vertices that could decide the part's worst error.
   const double part_worst = worst.empty() ? 0.0 : *std::max_element(worst.begin(), worst.end());
   for (int v = 0; v < set.vertexCount(); ++v) {
-    if (worst[v] <= kRefineShare * part_worst || worst[v] == 0.0) continue;
+    if (worst[v] <= kRefineShare * part_worst) continue;
     const VertexMotion motion = vertexMotion(set, v, bind_positions[v], frames);
-    const std::vector<unsigned> masks = candidateMasks(motion);
-    std::vector<int> best = unitsOf(motion, leastSquaresMask(motion, masks));
+    // Pass 1's rounding is already in `out`; only a strictly better worst frame replaces it.
+    std::vector<int> best;
     double best_worst = worst[v];
-    for (unsigned mask : masks) {
-      const std::vector<int> units = unitsOf(motion, mask);
+    for (unsigned mask : candidateMasks(motion)) {
+      std::vector<int> units = unitsOf(motion, mask);
       const double w = worstFrameError(motion, units, best_worst);
       if (w < best_worst) {
         best_worst = w;
-        best = units;
+        best = std::move(units);
       }
     }
-    writeUnits(motion, best, slots, v, &out);
+    if (!best.empty()) writeUnits(motion, best, slots, v, &out);
   }
   return out;
 }
