@@ -16,6 +16,23 @@ struct MuscleLocator {
   Eigen::Vector3d local = Eigen::Vector3d::Zero();  // the same point in that joint's bind frame
 };
 
+// One key of a muscle's set-driven response (the talk's "set driven key to simulate muscle bulges and
+// correct deformation"): at driver value `at` the skinned joint is moved `up` and `side` metres along
+// the muscle's rest up and side axes and scaled across its fibre by `scale`. Linear between keys, the
+// nearest key outside them. docs/muscle-model.md.
+struct ResponseKey {
+  double at = 0.0;
+  double up = 0.0;
+  double side = 0.0;
+  double scale = 1.0;
+};
+
+struct MuscleResponse {
+  std::vector<ResponseKey> ratio;  // driver: length ratio L / L_rest, clamped to [compression, stretch]
+  std::vector<ResponseKey> twist;  // driver: the insertion joint's twist about the fibre, radians
+  bool fitted = false;             // the keys came from `bake --response fit`
+};
+
 struct MusclePart {
   std::string group;  // export group: Arms, Deltoid, LatissimusDorsi, PectoralisMajor, TeresMajor, Trapezius
   std::string name;   // part name without side: TrapeziusA, Bicep, ...
@@ -31,9 +48,24 @@ struct MusclePart {
   Eigen::Vector2d bulge = Eigen::Vector2d::Zero();
   // Skin-weight falloff radius around the origin-insertion segment, metres; 0 = derive from body size.
   double weight_radius = 0.0;
+  // How the skinned joint moves with the muscle's drivers. placeMuscles() and readMuscleJson() fill it
+  // from `bulge` and the factors when the file has no curves (defaultMuscleResponse()).
+  MuscleResponse response;
+  // The joint the skinned joint rides and takes skin weight from; -1 until the bake chooses it
+  // (pipeline/muscle_weights.h chooseCarrierJoints()).
+  int carrier = -1;
 
   std::string fullName() const { return side + name; }  // e.g. LeftTrapeziusA
 };
+
+// The talk's response, as two linear keys on the length ratio: at full compression the bulge vector and
+// the volume-preserving across-fibre scale 1 / sqrt(compression), at rest and when stretched nothing
+// (a stretched muscle does not pull the skin in). No twist response.
+MuscleResponse defaultMuscleResponse(double compression, double stretch, const Eigen::Vector2d& bulge);
+
+// "" when the curves are usable: keys ascending, finite, scale > 0, and no response at rest (ratio 1,
+// twist 0), so that the bind pose is unchanged; otherwise what is wrong.
+std::string muscleResponseProblem(const MuscleResponse& response);
 
 struct MuscleSet {
   std::string character;  // source file name (no directories)

@@ -86,6 +86,7 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
     part.stretch = spec.stretch;
     part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
     part.weight_radius = spec.weight_radius_ref_m * scale;
+    part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
     if (sides != Sides::kLeft) rights.push_back(mirrorPart(part, skeleton, landmarks, origin_attach, insertion_attach));
     lefts.push_back(std::move(part));
   }

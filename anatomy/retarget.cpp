@@ -330,6 +330,14 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
     // Bulge and falloff radius are lengths on the body: they scale with it.
     moved.bulge = part.bulge * body_scale;
     moved.weight_radius = part.weight_radius * body_scale;
+    // So are the response's offsets (fitted or edited curves travel with the muscle); scales are ratios.
+    for (std::vector<ResponseKey>* curve : {&moved.response.ratio, &moved.response.twist}) {
+      for (ResponseKey& key : *curve) {
+        key.up *= body_scale;
+        key.side *= body_scale;
+      }
+    }
+    moved.carrier = -1;  // chosen again from the new character's weights
 
     if (carried) {
       const MuscleLocator* before[3] = {&part.origin, &part.insertion, &part.driver};

@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     BakeTimings timings;
     BakeResult bake = bakeCharacter(loaded.character, muscles, options, &timings);
     lap();
-    writeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), output);
+    writeGltf(bakedModel(*loaded.document, loaded.character, bake), output);
     const double write = lap();
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);

@@ -171,7 +171,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     options.influences = character.influences;
     options.gltf_weights = character.gltf_weights;
     BakeResult bake = bakeCharacter(body, muscles, options);
-    std::string model = serializeGltf(bakedModel(*loaded.character.document, body, muscles, bake), true);
+    std::string model = serializeGltf(bakedModel(*loaded.character.document, body, bake), true);
     writeFileAtomically(out.muscles, muscleJson(muscles, body.skeleton, preset.name));
     writeFileAtomically(out.model, model);
     JobOutcome outcome;

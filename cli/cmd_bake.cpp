@@ -15,6 +15,8 @@
 #include "formats/jiggle_json.h"
 #include "formats/muscle_json.h"
 #include "formats/packed_file.h"
+#include "formats/preset_json.h"
+#include "formats/quality_json.h"
 #include "formats/vrm_spring.h"
 #include "pipeline/bake.h"
 #include "pipeline/memory_table.h"
@@ -34,6 +36,9 @@ struct BakeCommandOptions {
   bool springs_only = false;
   int influences = 4;
   std::string gltf_weights = "milli";
+  std::string regions = "body";
+  std::string response = "auto";
+  std::string muscles_output;
   double fps = 0.0;
   bool json = false;
   PresetOptions presets;
@@ -99,6 +104,7 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
       {"memory_table", table},
   };
   if (bake.gltf_weights == GltfWeights::kUnorm16) stats["gltf_deformation_error_mm"] = deformationJson(character, bake, bake.gltf_error);
+  stats["deformation_quality"] = deformationQualityJson(bake.quality);
   return stats;
 }
 
@@ -129,6 +135,9 @@ int run(const BakeCommandOptions& options) {
   bake_options.influences = options.influences;
   parseGltfWeights(options.gltf_weights, &bake_options.gltf_weights);  // CLI11 has checked the name
   bake_options.fps = options.fps;
+  parseResponseMode(options.response, &bake_options.response);  // CLI11 has checked the name
+  bake_options.regions =
+      resolveBodyRegions(character, resolved.landmarks, readRegionPreset(presetFile(options.presets, "regions", options.regions)));
   if (!options.jiggle.empty()) {
     bake_options.jiggles =
         resolveJiggles(readJigglePreset(presetFile(options.presets, "jiggle", options.jiggle)), character.skeleton, &resolved.landmarks, &muscles);
@@ -143,7 +152,7 @@ int run(const BakeCommandOptions& options) {
   nlohmann::json stats = statsJson(options, character, muscles, bake);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
-  tinygltf::Model model = bakedModel(*resolved.loaded.document, character, muscles, bake);
+  tinygltf::Model model = bakedModel(*resolved.loaded.document, character, bake);
   const bool vrm_springs = !bake_options.jiggles.empty() && isVrm(model);
   if (options.springs_only && !vrm_springs)
     fail("USAGE", "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
@@ -154,6 +163,8 @@ int run(const BakeCommandOptions& options) {
   writeFileAtomically(options.output, model_bytes);
   if (!options.packed_output.empty()) writePackedFile(options.packed_output, packed);
   if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, stats.dump(2) + "\n");
+  if (!options.muscles_output.empty())
+    writeFileAtomically(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
 
   if (options.json) std::cout << stats.dump(2) << "\n";
   std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
@@ -174,6 +185,16 @@ int run(const BakeCommandOptions& options) {
     std::cerr << std::setprecision(3) << "largest error at vertex " << peak.vertex << " of mesh '"
               << character.meshes[peak.mesh_part].name << "' in clip '" << bake.clips[bake.error.peak_clip].name
               << "' at " << peak.time << " s\n";
+  }
+  if (bake.fit.parameters > 0) {
+    std::cerr << std::setprecision(3) << "response fitted: " << bake.fit.fitted_parts << " muscles, " << bake.fit.parameters
+              << " keys over " << bake.fit.poses << " poses; whole-body volume change (RMS) " << 100.0 * bake.fit.body_rms_before
+              << " % -> " << 100.0 * bake.fit.body_rms_after << " %\n";
+  }
+  for (const ClipQuality& clip : bake.quality.clips) {
+    std::cerr << std::setprecision(2) << "volume in '" << clip.clip << "': input skinning " << std::showpos
+              << 100.0 * clip.body.input.change << " %, dual quaternions " << 100.0 * clip.body.dual_quaternion.change
+              << " %, rig " << 100.0 * clip.body.rig.change << std::noshowpos << " % (largest change against the bind pose)\n";
   }
   if (!bake_options.jiggles.empty()) {
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()
@@ -212,7 +233,20 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
-  command->add_option("--stats", options->stats_output, "Write figures (deformation error, bytes per vertex) as JSON");
+  command->add_option("--stats", options->stats_output,
+                      "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
+                      "body region, bytes per vertex) as JSON");
+  command->add_option("--response", options->response,
+                      "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "
+                      "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "
+                      "nothing (docs/muscle-model.md)")
+      ->check(CLI::IsMember({"auto", "fit", "keep"}))
+      ->capture_default_str();
+  command->add_option("--muscles-out", options->muscles_output,
+                      "Write the muscles as baked (fitted response curves included) as muscle JSON, to edit or retarget");
+  command->add_option("--regions", options->regions,
+                      "Body regions for the volume figures (a file, or a name under presets/regions/)")
+      ->capture_default_str();
   command->add_option("--jiggle", options->jiggle,
                       "Jiggle preset (a file, or a name under presets/jiggle/, e.g. biceps): spring joints with cone "
                       "limits simulated on a fixed 240 Hz step and baked into every clip; on a VRM also exported as "

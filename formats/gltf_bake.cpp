@@ -8,6 +8,7 @@
 
 #include "anatomy/error.h"
 #include "formats/gltf_buffer.h"
+#include "pipeline/muscle_joint.h"
 
 namespace rigbake {
 namespace {
@@ -109,8 +110,7 @@ void writeJiggles(const BakedClip& clip, const Skeleton& skeleton, int input, Gl
 
 }  // namespace
 
-tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const MuscleSet& muscles,
-                           const BakeResult& bake) {
+tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const BakeResult& bake) {
   tinygltf::Model model = modelOf(document);
   const Skeleton& skeleton = character.skeleton;
   GltfBufferAppender data(&model);
@@ -124,13 +124,14 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     node.rotation = quat(joint.rest_local.rotation.normalized());
     if (joint.role == MuscleJointRole::kSkinned) node.scale = vec(joint.rest_local.scale);
     // What an engine needs to rebuild the constraints at run time instead of playing the samples.
-    const MusclePart& part = muscles.parts[joint.muscle];
+    const MusclePart& part = bake.muscles.parts[joint.muscle];
     static const char* kRoleNames[] = {"base", "tip", "driver", "skinned"};
     tinygltf::Value::Object description;
     description["muscle"] = tinygltf::Value(part.fullName());
     description["role"] = tinygltf::Value(std::string(kRoleNames[static_cast<int>(joint.role)]));
     description["origin_joint"] = tinygltf::Value(skeleton.names[part.origin.joint]);
     description["insertion_joint"] = tinygltf::Value(skeleton.names[part.insertion.joint]);
+    description["carrier_joint"] = tinygltf::Value(skeleton.names[muscleCarrierJoint(part)]);
     description["compression"] = tinygltf::Value(part.compression);
     description["stretch"] = tinygltf::Value(part.stretch);
     tinygltf::Value::Object extras;

@@ -13,8 +13,8 @@ class Model;
 
 namespace rigbake {
 
-// A copy of the document's model with the bake applied; write it with writeGltf().
-tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const MuscleSet& muscles,
-                           const BakeResult& bake);
+// A copy of the document's model with the bake applied (bake.muscles name the joints); write it
+// with writeGltf().
+tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const BakeResult& bake);
 
 }  // namespace rigbake

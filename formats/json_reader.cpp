@@ -96,6 +96,11 @@ int JsonReader::asInt() const {
   return value_.get<int>();
 }
 
+bool JsonReader::asBool() const {
+  if (!value_.is_boolean()) fail("must be true or false");
+  return value_.get<bool>();
+}
+
 std::vector<std::string> JsonReader::asStringList() const {
   if (value_.is_string()) return {value_.get<std::string>()};
   std::vector<std::string> result;

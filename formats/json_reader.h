@@ -33,6 +33,7 @@ class JsonReader {
   std::string asString() const;
   double asNumber() const;
   int asInt() const;
+  bool asBool() const;
   std::vector<std::string> asStringList() const;  // a string or an array of strings
 
  private:

@@ -24,6 +24,42 @@ Eigen::Vector3d readVector(const JsonReader& in) {
 }
 
 const char* kMusclesCode = "MUSCLES_INVALID";
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+nlohmann::json curveJson(const std::vector<ResponseKey>& keys, double at_unit) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ResponseKey& key : keys) out.push_back({{"at", key.at / at_unit}, {"bulge", {key.up, key.side}}, {"scale", key.scale}});
+  return out;
+}
+
+nlohmann::json responseJson(const MuscleResponse& response) {
+  nlohmann::json out = {{"ratio", curveJson(response.ratio, 1.0)}, {"twist_deg", curveJson(response.twist, kDegree)}};
+  if (response.fitted) out["fitted"] = true;
+  return out;
+}
+
+std::vector<ResponseKey> readCurve(const JsonReader& in, double at_unit) {
+  std::vector<ResponseKey> keys;
+  for (size_t k = 0; k < in.arraySize(); ++k) {
+    JsonReader key = in.at(k);
+    key.allowKeys({"at", "bulge", "scale"});
+    JsonReader bulge = key.at("bulge");
+    if (bulge.arraySize() != 2) bulge.fail("must be [up, side] in metres");
+    keys.push_back({key.at("at").asNumber() * at_unit, bulge.at(0).asNumber(), bulge.at(1).asNumber(), key.at("scale").asNumber()});
+  }
+  return keys;
+}
+
+MuscleResponse readResponse(const JsonReader& in) {
+  in.allowKeys({"ratio", "twist_deg", "fitted"});
+  MuscleResponse response;
+  response.ratio = readCurve(in.at("ratio"), 1.0);
+  response.twist = in.has("twist_deg") ? readCurve(in.at("twist_deg"), kDegree) : std::vector<ResponseKey>{};
+  response.fitted = in.has("fitted") && in.at("fitted").asBool();
+  const std::string problem = muscleResponseProblem(response);
+  if (!problem.empty()) in.fail(problem);
+  return response;
+}
 
 }  // namespace
 
@@ -44,6 +80,7 @@ std::string muscleJson(const MuscleSet& muscles, const Skeleton& skeleton, const
         {"stretch", part.stretch},
         {"bulge", {part.bulge.x(), part.bulge.y()}},
         {"weight_radius", part.weight_radius},
+        {"response", responseJson(part.response)},
         {"origin", locatorJson(part.origin, skeleton)},
         {"insertion", locatorJson(part.insertion, skeleton)},
         {"driver", locatorJson(part.driver, skeleton)},
@@ -82,8 +119,8 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
     JsonReader muscles = block.at("muscles");
     for (const std::string& full : muscles.keys()) {
       JsonReader item = muscles.at(full);
-      item.allowKeys({"group", "part", "side", "compression", "stretch", "bulge", "weight_radius", "origin", "insertion",
-                      "driver"});
+      item.allowKeys({"group", "part", "side", "compression", "stretch", "bulge", "weight_radius", "response", "origin",
+                      "insertion", "driver"});
       MusclePart part;
       part.group = item.at("group").asString();
       part.name = item.at("part").asString();
@@ -98,6 +135,8 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
       part.bulge = {bulge.at(0).asNumber(), bulge.at(1).asNumber()};
       part.weight_radius = item.has("weight_radius") ? item.at("weight_radius").asNumber() : 0.0;
+      part.response = item.has("response") ? readResponse(item.at("response"))
+                                           : defaultMuscleResponse(part.compression, part.stretch, part.bulge);
       for (auto [key, locator] : {std::pair<const char*, MuscleLocator*>{"origin", &part.origin},
                                   {"insertion", &part.insertion},
                                   {"driver", &part.driver}}) {
@@ -174,6 +213,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       part.stretch = spec.stretch;
       part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
       part.weight_radius = spec.weight_radius_ref_m * scale;
+      part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
       set.parts.push_back(std::move(part));
     }
   }

@@ -210,4 +210,51 @@ MusclePreset readMusclePreset(const std::string& path) {
   return preset;
 }
 
+RegionPreset readRegionPreset(const std::string& path) {
+  nlohmann::json json = readJsonFile(path);
+  JsonReader in(json, path, "", kPresetCode);
+  in.allowKeys({"$schema", "name", "description", "regions"});
+  RegionPreset preset;
+  preset.file = path;
+  preset.name = in.has("name") ? in.at("name").asString() : fileStem(path);
+  JsonReader regions = in.at("regions");
+  if (regions.arraySize() == 0) regions.fail("must list at least one region rule");
+  for (size_t i = 0; i < regions.arraySize(); ++i) {
+    JsonReader item = regions.at(i);
+    item.allowKeys({"name", "sided", "owners", "near", "facing", "why"});
+    RegionRule rule;
+    rule.pointer = item.pointer();
+    rule.name = item.at("name").asString();
+    if (rule.name.empty()) item.at("name").fail("must not be empty");
+    rule.sided = item.has("sided") && item.at("sided").asBool();
+    rule.owners = item.at("owners").asStringList();
+    if (rule.owners.empty()) item.at("owners").fail("must name at least one landmark");
+    for (const std::string& owner : rule.owners) requireLandmark(item.at("owners"), owner);
+    if (item.has("near")) {
+      JsonReader near = item.at("near");
+      near.allowKeys({"landmark", "radius"});
+      rule.near = near.at("landmark").asString();
+      requireLandmark(near.at("landmark"), rule.near);
+      JsonReader radius = near.at("radius");
+      radius.allowKeys({"from", "to", "fraction"});
+      rule.radius_from = radius.at("from").asString();
+      rule.radius_to = radius.at("to").asString();
+      requireLandmark(radius.at("from"), rule.radius_from);
+      requireLandmark(radius.at("to"), rule.radius_to);
+      rule.radius_fraction = radius.at("fraction").asNumber();
+      if (!(rule.radius_fraction > 0)) radius.at("fraction").fail("must be positive");
+    }
+    if (item.has("facing")) {
+      JsonReader facing = item.at("facing");
+      facing.allowKeys({"side", "of"});
+      rule.facing = facing.at("side").asString();
+      if (rule.facing != "forward" && rule.facing != "back") facing.at("side").fail("must be \"forward\" or \"back\"");
+      rule.facing_landmark = facing.at("of").asString();
+      requireLandmark(facing.at("of"), rule.facing_landmark);
+    }
+    preset.rules.push_back(std::move(rule));
+  }
+  return preset;
+}
+
 }  // namespace rigbake

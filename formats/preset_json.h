@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/body_regions.h"
 #include "anatomy/presets.h"
 
 namespace rigbake {
@@ -14,5 +15,7 @@ NamingMap readNamingMap(const std::string& path);
 std::vector<NamingMap> readNamingMaps(const std::string& directory);
 LandmarkRules readLandmarkRules(const std::string& path);
 MusclePreset readMusclePreset(const std::string& path);
+// presets/regions/*.json: body regions for the deformation-quality figures.
+RegionPreset readRegionPreset(const std::string& path);
 
 }  // namespace rigbake

@@ -1,5 +1,6 @@
 #include "pipeline/bake.h"
 
+#include <algorithm>
 #include <cassert>
 #include <chrono>
 
@@ -10,6 +11,25 @@
 #include "pipeline/quantize_for_motion.h"
 
 namespace rigbake {
+
+const char* responseModeName(ResponseMode mode) {
+  switch (mode) {
+    case ResponseMode::kAuto: return "auto";
+    case ResponseMode::kFit: return "fit";
+    case ResponseMode::kKeep: return "keep";
+  }
+  return "auto";
+}
+
+bool parseResponseMode(const std::string& name, ResponseMode* mode) {
+  for (ResponseMode candidate : {ResponseMode::kAuto, ResponseMode::kFit, ResponseMode::kKeep}) {
+    if (name == responseModeName(candidate)) {
+      *mode = candidate;
+      return true;
+    }
+  }
+  return false;
+}
 
 std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
   switch (role) {
@@ -26,24 +46,20 @@ namespace {
 constexpr MuscleJointRole kRoles[] = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
                                       MuscleJointRole::kSkinned};
 
+// Base and driver ride the origin attach joint, the tip the insertion joint (the talk's attachments);
+// the skinned joint rides its carrier, the joint whose skin weight it takes.
 int parentOf(const MusclePart& part, MuscleJointRole role) {
-  return role == MuscleJointRole::kTip ? part.insertion.joint : muscleParentJoint(part);
+  switch (role) {
+    case MuscleJointRole::kTip: return part.insertion.joint;
+    case MuscleJointRole::kSkinned: return muscleCarrierJoint(part);
+    default: return part.origin.joint;
+  }
 }
 
-// World transform of one of a muscle's joints in an evaluated state. The base and tip keep unit
-// scale; the driver carries the bulge but not the skinned joint's scale.
-Eigen::Affine3d roleWorld(const MuscleJointState& state, MuscleJointRole role) {
-  switch (role) {
-    case MuscleJointRole::kBase: return state.base;
-    case MuscleJointRole::kTip: return state.tip;
-    case MuscleJointRole::kDriver: {
-      Eigen::Affine3d driver = state.base;
-      driver.translation() = state.driver + state.bulge_offset;
-      return driver;
-    }
-    case MuscleJointRole::kSkinned: return state.skinned;
-  }
-  return state.skinned;
+// World transform of muscle m's joint in one evaluation of the rig (helpers: base, tip, driver).
+Eigen::Affine3d roleWorld(const RigEvaluation& evaluation, int m, MuscleJointRole role) {
+  if (role == MuscleJointRole::kSkinned) return matrixAt(evaluation.skinned, m);
+  return matrixAt(evaluation.helpers, 3 * static_cast<size_t>(m) + static_cast<size_t>(role));
 }
 
 Trs localTrs(const Eigen::Affine3d& world, const Pose& pose, int parent) {
@@ -169,28 +185,81 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   const int muscle_count = static_cast<int>(muscles.parts.size());
   const double body_height = muscles.body_height;
 
+  // Where each muscle takes weight, and from which joint: its carrier, chosen from those shares.
+  const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height);
+  std::vector<SurfaceGraph> surfaces;
+  std::vector<MuscleShares> shares;
+  for (const MeshPart& mesh : character.meshes) {
+    if (!mesh.skinned || mesh.positions.empty()) continue;
+    surfaces.push_back(buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3)));
+    shares.push_back(muscleShares(mesh, surfaces.back(), muscles, radii, options.weights));
+  }
+  result.muscles = muscles;
+  chooseCarrierJoints(character, surfaces, shares, &result.muscles);
+  const MuscleSet& rigged = result.muscles;
+  // A muscle's skinned joint is skeleton joint (size + m) in the influences below.
+  std::vector<int> muscle_joints(muscle_count);
+  for (int m = 0; m < muscle_count; ++m) muscle_joints[m] = skeleton.size() + m;
+
+  // Full-precision weights with the muscles, per skinned part: they do not depend on the response.
+  std::vector<MeasuredPart> measured;
+  {
+    size_t skinned_index = 0;
+    for (size_t p = 0; p < character.meshes.size(); ++p) {
+      const MeshPart& mesh = character.meshes[p];
+      if (!mesh.skinned || mesh.positions.empty()) continue;
+      InfluenceSet base = influencesFromMesh(mesh);
+      if (!checkInfluences(base, skeleton.size()).empty())
+        fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
+      MeasuredPart part;
+      part.mesh_part = static_cast<int>(p);
+      part.input = normalized(base);
+      part.rig = normalized(addMuscleInfluences(part.input, surfaces[skinned_index], shares[skinned_index], rigged,
+                                                muscle_joints, options.weights));
+      ++skinned_index;
+      measured.push_back(std::move(part));
+    }
+  }
+  timing.weights += lap();
+
+  // The response fit, over poses taken evenly from every clip.
+  std::vector<char> fit_part(muscle_count, 0);
+  for (int m = 0; m < muscle_count; ++m)
+    fit_part[m] = options.response == ResponseMode::kFit ||
+                  (options.response == ResponseMode::kAuto && hasPresetResponse(rigged.parts[m]));
+  if (std::find(fit_part.begin(), fit_part.end(), 1) != fit_part.end() && !character.clips.empty()) {
+    std::vector<std::pair<int, double>> samples;
+    for (size_t c = 0; c < character.clips.size(); ++c)
+      for (double time : sampleTimes(character.clips[c], options.fps)) samples.emplace_back(static_cast<int>(c), time);
+    const size_t wanted = static_cast<size_t>(std::max(1, options.fit.max_poses));
+    std::vector<Pose> poses;
+    for (size_t i = 0; i < std::min(wanted, samples.size()); ++i) {
+      const auto& [clip, time] = samples[i * samples.size() / std::min(wanted, samples.size())];
+      poses.push_back(sampleClip(skeleton, character.clips[clip], time));
+    }
+    result.fit = fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, options.fit);
+  }
+  timing.fit = lap();
+  const runtime::MuscleRig<double> rig = buildMuscleRig(rigged, skeleton);
+
   // Joints: bind and rest transforms.
   const Pose rest = restPose(skeleton);
+  const RigEvaluation at_bind = evaluateRig(rig, bindPose(skeleton), true);
+  const RigEvaluation at_rest = evaluateRig(rig, rest, true);
   for (int m = 0; m < muscle_count; ++m) {
-    const MusclePart& part = muscles.parts[m];
-    const MuscleJointState at_bind = evaluateMuscle(part, skeleton, bindPose(skeleton));
-    const MuscleJointState at_rest = evaluateMuscle(part, skeleton, rest);
+    const MusclePart& part = rigged.parts[m];
     for (MuscleJointRole role : kRoles) {
       BakedJoint joint;
       joint.name = muscleJointName(part, role);
       joint.muscle = m;
       joint.role = role;
       joint.parent = parentOf(part, role);
-      joint.bind_world = role == MuscleJointRole::kSkinned ? muscleBindTransform(part, skeleton) : roleWorld(at_bind, role);
-      joint.rest_local = localTrs(roleWorld(at_rest, role), rest, joint.parent);
+      joint.bind_world = role == MuscleJointRole::kSkinned ? muscleBindTransform(part, skeleton) : roleWorld(at_bind, m, role);
+      joint.rest_local = localTrs(roleWorld(at_rest, m, role), rest, joint.parent);
       if (role == MuscleJointRole::kSkinned) result.skinned_joint_of_muscle.push_back(static_cast<int>(result.joints.size()));
       result.joints.push_back(joint);
     }
   }
-  // A muscle's skinned joint is skeleton joint (size + m) in the influences below.
-  std::vector<int> muscle_joints(muscle_count);
-  for (int m = 0; m < muscle_count; ++m) muscle_joints[m] = skeleton.size() + m;
-
   // Clips: every baked joint's local TRS, every muscle's length ratio, and the skin matrices of every
   // sampled frame (for the rounding of the weights and for the deformation error).
   std::vector<std::vector<SkinFrame>> clip_frames;
@@ -204,22 +273,22 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     for (double time : baked.times) {
       const Pose pose = sampleClip(skeleton, clip, time);
       if (!options.jiggles.empty()) poses.push_back(pose);
+      const RigEvaluation evaluation = evaluateRig(rig, pose, true);
       std::vector<Trs> locals;
       std::vector<double> ratios;
       SkinFrame skin(skeleton.size() + muscle_count);
       for (int j = 0; j < skeleton.size(); ++j) skin[j] = skinMatrix(pose, skeleton, j);
       for (int m = 0; m < muscle_count; ++m) {
-        const MusclePart& part = muscles.parts[m];
-        const MuscleJointState state = evaluateMuscle(part, skeleton, pose);
-        for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(state, role), pose, parentOf(part, role)));
-        ratios.push_back(state.ratio);
-        skin[skeleton.size() + m] = state.skinned * result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
+        const MusclePart& part = rigged.parts[m];
+        for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(evaluation, m, role), pose, parentOf(part, role)));
+        ratios.push_back(evaluation.drivers[m].ratio);
+        skin[skeleton.size() + m] = matrixAt(evaluation.skinned, m) * result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
       }
       baked.local.push_back(std::move(locals));
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
-    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, muscles, clip, poses, options, result, &baked, &frames);
+    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, rigged, clip, poses, options, result, &baked, &frames);
     clip_frames.push_back(std::move(frames));
     result.clips.push_back(std::move(baked));
   }
@@ -228,20 +297,15 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (const auto& frames : clip_frames) all_frames.insert(all_frames.end(), frames.begin(), frames.end());
 
   // Weights per skinned part.
-  const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height);
   const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
   result.gltf_weights = options.gltf_weights;
   Approximations milli, fine;  // dequantized, skeleton indices
-  for (size_t p = 0; p < character.meshes.size(); ++p) {
+  for (const MeasuredPart& weights : measured) {
+    const size_t p = static_cast<size_t>(weights.mesh_part);
     const MeshPart& mesh = character.meshes[p];
-    if (!mesh.skinned || mesh.positions.empty()) continue;
     BakedPart baked;
-    baked.mesh_part = static_cast<int>(p);
-    InfluenceSet base = influencesFromMesh(mesh);
-    if (!checkInfluences(base, skeleton.size()).empty())
-      fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
-    SurfaceGraph surface = buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3));
-    baked.full = normalized(addMuscleInfluences(mesh, base, surface, skeleton, muscles, muscle_joints, radii, options.weights));
+    baked.mesh_part = weights.mesh_part;
+    baked.full = weights.rig;
     const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
     const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames);
     const QuantizedInfluences quantized_fine =
@@ -286,6 +350,27 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   result.error = measureDeformation(character, result, milli, clip_frames);
   if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames);
   timing.error = lap();
+
+  if (options.measure_quality) {
+    // Measured with the weights written, as an engine skins them.
+    for (size_t a = 0; a < measured.size(); ++a) measured[a].rig = unorm16 ? fine[a].second : milli[a].second;
+    std::vector<MeasuredClip> clips;
+    for (size_t c = 0; c < result.clips.size(); ++c) {
+      MeasuredClip clip;
+      clip.name = result.clips[c].name;
+      clip.times = result.clips[c].times;
+      clip.frames = &clip_frames[c];
+      for (const std::vector<double>& ratios : result.clips[c].ratio) {
+        std::vector<double> clamped(ratios.size());
+        for (size_t m = 0; m < ratios.size(); ++m)
+          clamped[m] = std::clamp(ratios[m], rigged.parts[m].compression, rigged.parts[m].stretch);
+        clip.ratio.push_back(std::move(clamped));
+      }
+      clips.push_back(std::move(clip));
+    }
+    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips);
+  }
+  timing.quality = lap();
   return result;
 }
 

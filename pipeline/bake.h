@@ -12,13 +12,25 @@
 
 #include "anatomy/character.h"
 #include "anatomy/muscle_set.h"
+#include "anatomy/body_regions.h"
 #include "pipeline/deformation_error.h"
+#include "pipeline/deformation_quality.h"
 #include "pipeline/influences.h"
 #include "pipeline/jiggle.h"
 #include "pipeline/muscle_weights.h"
 #include "pipeline/pack_influences.h"
+#include "pipeline/response_fit.h"
 
 namespace rigbake {
+
+// Whether the bake fits the muscles' response to the clips (pipeline/response_fit.h).
+enum class ResponseMode {
+  kAuto,  // fit the parts that still have their preset's response; keep curves a muscle file brings
+  kFit,   // fit every part (a file's curves are the starting point and the prior)
+  kKeep,  // fit nothing
+};
+const char* responseModeName(ResponseMode mode);
+bool parseResponseMode(const std::string& name, ResponseMode* mode);
 
 struct BakeOptions {
   int influences = 4;  // 4, 7 or 10
@@ -29,6 +41,11 @@ struct BakeOptions {
   // this character and these muscles, and the hits that kick them.
   std::vector<JiggleSetup> jiggles;
   std::vector<HitImpulse> hits;
+  // Body regions (anatomy/body_regions.h) for the deformation-quality figures; none: whole body only.
+  std::vector<BodyRegion> regions;
+  bool measure_quality = true;  // volumes against plain and dual-quaternion skinning, per clip and region
+  ResponseMode response = ResponseMode::kAuto;
+  ResponseFitOptions fit;
 };
 
 // The four joints of one muscle group. Each is a new node: the skinned joint is also added to every
@@ -87,6 +104,9 @@ struct BakedPart {
 
 struct BakeResult {
   int influences = 0;
+  // The muscles as baked: each part's carrier joint chosen and its response as used (fitted when
+  // BakeOptions asked for it). Write these, not the input, into the file and any muscle JSON.
+  MuscleSet muscles;
   std::vector<BakedJoint> joints;  // 4 per muscle: base, tip, driver, skinned
   std::vector<int> skinned_joint_of_muscle;  // index into joints
   std::vector<BakedClip> clips;
@@ -96,14 +116,19 @@ struct BakeResult {
   DeformationFigures error;
   GltfWeights gltf_weights = GltfWeights::kMilli;
   DeformationFigures gltf_error;  // GltfWeights::kUnorm16 only: the 1/65535 WEIGHTS_n
+  // Volume against the input's own and dual-quaternion skinning, with the WEIGHTS_n written.
+  DeformationQuality quality;
+  ResponseFitReport fit;  // parameters == 0 when nothing was fitted
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).
 struct BakeTimings {
   double evaluate = 0.0;  // sampling every clip and evaluating the muscle joints
   double weights = 0.0;   // muscle weights, smoothing, pruning and rounding
+  double fit = 0.0;       // fitting the muscles' response
   double pack = 0.0;      // glTF attributes and packed buffers
   double error = 0.0;     // deformation error over every frame
+  double quality = 0.0;   // deformation-quality volumes over every frame
 };
 
 // Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.

@@ -545,7 +545,7 @@ std::vector<JiggleSetup> resolveJiggles(const JigglePreset& preset, const Skelet
       setup.name = part->fullName() + "_muscleSkinned";
       setup.host = JiggleHost::kMuscle;
       setup.muscle = index;
-      setup.root = muscleParentJoint(*part);
+      setup.root = part->origin.joint;  // the up vector rides the bone the muscle starts on
       setup.aim_axis = entry.has_axis ? entry.axis.normalized() : Eigen::Vector3d::UnitX();
       setup.major_axis = entry.has_major_axis ? entry.major_axis : Eigen::Vector3d::UnitY();
       setup.length = entry.length > 0.0 ? entry.length : 0.5 * rest.length;

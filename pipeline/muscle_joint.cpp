@@ -1,12 +1,8 @@
-// Muscle joint group evaluation.
-// Sources: God of War Ragnarök rigging talk, "Muscle Joint Group" and "Muscle Properties" (aim
-// constraints for the attachments, a point constraint for the muscle movement, set driven keys for
-// the bulge; fibre structure from start to end; volume preservation), and
-// createFromAttachObjs(name, originAttach, insertionAttach, compressionFactor, stretchFactor,
-// bulgeVector). The aim matrix is the one of "Rigging with Triangles" (GDC 2018): X aims at the
-// target, the up vector is made orthogonal to it, Z = X x Y. The up vector is carried by the origin
-// attach joint and swung with the minimal rotation (Rodrigues) that takes the carried rest fibre to
-// the current fibre, so it never flips as a limb passes overhead. docs/muscle-model.md has the model.
+// Muscle joint groups: the builder from placed muscles to the runtime rig (runtime/muscle_rig.h, which
+// holds the equations and cites their sources), and one-part evaluation for tests and reports. The
+// rest frame follows the talk's createFromAttachObjs: the fibre runs from origin to insertion, the up
+// axis points from the origin attach joint towards the belly (muscles bulge away from the bone they
+// start on). docs/muscle-model.md.
 #include "pipeline/muscle_joint.h"
 
 #include <algorithm>
@@ -20,41 +16,43 @@ namespace {
 // The rest up vector points from the origin attach joint towards the muscle belly, unless the belly
 // lies within this fraction of L_rest of the fibre line through that joint (then a joint axis is used).
 constexpr double kOutwardMinFraction = 0.01;
-// Below this fraction of L_rest the posed fibre has no direction; the carried rest fibre stands in.
-constexpr double kMinLengthFraction = 1e-9;
-// 1 + cos(angle) below which the fibre has reversed relative to its origin joint: the minimal
-// rotation is undefined there (any half turn about an axis across the fibre qualifies).
-constexpr double kReversedFibre = 1e-12;
 
 Eigen::Vector3d acrossFibre(const Eigen::Vector3d& v, const Eigen::Vector3d& fibre) {
   return v - v.dot(fibre) * fibre;
 }
 
-// Rotates v by the smallest rotation that takes unit vector `from` to unit vector `to`
-// (Rodrigues' formula with k = from x to, |k| = sin, from . to = cos).
-Eigen::Vector3d swing(const Eigen::Vector3d& from, const Eigen::Vector3d& to, const Eigen::Vector3d& v) {
-  const double cosine = from.dot(to);
-  if (1.0 + cosine < kReversedFibre) {
-    // Half turn about v's own direction across `from`: v (already across `from`) stays put.
-    return v;
-  }
-  const Eigen::Vector3d k = from.cross(to);
-  return cosine * v + k.cross(v) + (k.dot(v) / (1.0 + cosine)) * k;
-}
-
-Eigen::Matrix3d frameColumns(const Eigen::Vector3d& x, const Eigen::Vector3d& y, const Eigen::Vector3d& z) {
-  Eigen::Matrix3d m;
-  m.col(0) = x;
-  m.col(1) = y;
-  m.col(2) = z;
-  return m;
-}
-
-Eigen::Affine3d placedFrame(const Eigen::Vector3d& position, const Eigen::Matrix3d& rotation) {
+Eigen::Affine3d placedFrame(const Eigen::Vector3d& position, const Eigen::Vector3d& x, const Eigen::Vector3d& y,
+                            const Eigen::Vector3d& z) {
   Eigen::Affine3d frame = Eigen::Affine3d::Identity();
-  frame.linear() = rotation;
+  frame.linear().col(0) = x;
+  frame.linear().col(1) = y;
+  frame.linear().col(2) = z;
   frame.translation() = position;
   return frame;
+}
+
+void copy3(const Eigen::Vector3d& v, double* out) {
+  out[0] = v.x();
+  out[1] = v.y();
+  out[2] = v.z();
+}
+
+// A joint's bind rotation (its frame with any uniform scale divided out).
+Eigen::Matrix3d bindRotation(const Skeleton& skeleton, int joint) {
+  Eigen::Matrix3d r = skeleton.bind_world[joint].linear();
+  const Eigen::Vector3d x = r.col(0).normalized();
+  const Eigen::Vector3d y = acrossFibre(r.col(1), x).normalized();
+  r.col(0) = x;
+  r.col(1) = y;
+  r.col(2) = x.cross(y);
+  return r;
+}
+
+void appendCurve(const std::vector<ResponseKey>& curve, double side_sign, std::vector<runtime::ResponseKey<double>>* keys,
+                 int* begin, int* count) {
+  *begin = static_cast<int>(keys->size());
+  *count = static_cast<int>(curve.size());
+  for (const ResponseKey& key : curve) keys->push_back({key.at, key.up, side_sign * key.side, key.scale});
 }
 
 }  // namespace
@@ -65,6 +63,7 @@ std::string musclePartProblem(const MusclePart& part, const Skeleton& skeleton) 
     return "origin.joint " + std::to_string(part.origin.joint) + joints;
   if (part.insertion.joint < 0 || part.insertion.joint >= skeleton.size())
     return "insertion.joint " + std::to_string(part.insertion.joint) + joints;
+  if (part.carrier >= skeleton.size()) return "carrier joint " + std::to_string(part.carrier) + joints;
   if (!part.origin.world.allFinite() || !part.insertion.world.allFinite() || !part.driver.world.allFinite())
     return "a locator position is not finite";
   const double length = (part.insertion.world - part.origin.world).norm();
@@ -76,6 +75,8 @@ std::string musclePartProblem(const MusclePart& part, const Skeleton& skeleton) 
   if (!(part.stretch >= 1.0 && std::isfinite(part.stretch)))
     return "stretch " + std::to_string(part.stretch) + " is not a finite number >= 1";
   if (!part.bulge.allFinite()) return "bulge is not finite";
+  const std::string response = muscleResponseProblem(part.response);
+  if (!response.empty()) return "response: " + response;
   return "";
 }
 
@@ -112,71 +113,116 @@ MuscleRestFrame muscleRestFrame(const MusclePart& part, const Skeleton& skeleton
   const Eigen::Vector3d driver = part.driver.world - rest.origin;
   rest.driver_fraction = driver.dot(rest.fibre) / rest.length;
   rest.driver_offset = {driver.dot(rest.up), driver.dot(rest.side)};
-  rest.bulge_side_sign = part.side == "Right" ? -1.0 : 1.0;
+  rest.side_sign = part.side == "Right" ? -1.0 : 1.0;
   return rest;
-}
-
-Eigen::Vector3d muscleScale(double clamped_ratio) {
-  assert(clamped_ratio > 0.0);
-  const double across = 1.0 / std::sqrt(clamped_ratio);
-  return {clamped_ratio, across, across};
-}
-
-double muscleBulgeWeight(double clamped_ratio, double compression) {
-  if (clamped_ratio >= 1.0 || compression >= 1.0) return 0.0;
-  return (1.0 - clamped_ratio) / (1.0 - compression);
-}
-
-MuscleJointState evaluateMuscle(const MusclePart& part, const Skeleton& skeleton, const Pose& pose) {
-  assert(static_cast<int>(pose.world.size()) == skeleton.size());
-  const MuscleRestFrame rest = muscleRestFrame(part, skeleton);
-  // Locators ride rigidly on their attach joints: bind world -> posed world through the joint's
-  // skinning matrix, as a vertex bound only to that joint would.
-  const Eigen::Affine3d origin_carry = skinMatrix(pose, skeleton, part.origin.joint);
-  const Eigen::Affine3d insertion_carry = skinMatrix(pose, skeleton, part.insertion.joint);
-
-  MuscleJointState state;
-  state.origin = origin_carry * rest.origin;
-  state.insertion = insertion_carry * rest.insertion;
-  state.rest_length = rest.length;
-
-  // The rest fibre and up vector as the origin joint carries them; the up vector is then swung with
-  // the fibre's own motion relative to that joint.
-  const Eigen::Vector3d carried_fibre = (origin_carry.linear() * rest.fibre).normalized();
-  const Eigen::Vector3d carried_up =
-      acrossFibre((origin_carry.linear() * rest.up).normalized(), carried_fibre).normalized();
-
-  const Eigen::Vector3d segment = state.insertion - state.origin;
-  state.length = segment.norm();
-  const Eigen::Vector3d fibre =
-      state.length > kMinLengthFraction * rest.length ? Eigen::Vector3d(segment / state.length) : carried_fibre;
-  // Gram-Schmidt removes the rounding the swing leaves (and any shear the carry had).
-  const Eigen::Vector3d up = acrossFibre(swing(carried_fibre, fibre, carried_up), fibre).normalized();
-  const Eigen::Vector3d side = fibre.cross(up);
-
-  const Eigen::Matrix3d base_rotation = frameColumns(fibre, up, side);
-  state.base = placedFrame(state.origin, base_rotation);
-  // The tip aims back at the origin with the same up vector; Z follows from the right-hand rule.
-  state.tip = placedFrame(state.insertion, frameColumns(-fibre, up, -side));
-
-  // Point constraint between base and tip at the rest fraction, with the rest offset across the fibre.
-  state.driver = state.origin + rest.driver_fraction * state.length * fibre + rest.driver_offset.x() * up +
-                 rest.driver_offset.y() * side;
-
-  state.ratio = state.length / rest.length;
-  state.clamped_ratio = std::clamp(state.ratio, part.compression, part.stretch);
-  state.scale = muscleScale(state.clamped_ratio);
-  const double bulge_weight = muscleBulgeWeight(state.clamped_ratio, part.compression);
-  state.bulge_offset = bulge_weight * (part.bulge.x() * up + rest.bulge_side_sign * part.bulge.y() * side);
-
-  state.skinned = placedFrame(state.driver + state.bulge_offset, base_rotation);
-  state.skinned.scale(state.scale);
-  return state;
 }
 
 Eigen::Affine3d muscleBindTransform(const MusclePart& part, const Skeleton& skeleton) {
   const MuscleRestFrame rest = muscleRestFrame(part, skeleton);
-  return placedFrame(part.driver.world, frameColumns(rest.fibre, rest.up, rest.side));
+  return placedFrame(part.driver.world, rest.fibre, rest.up, rest.side);
+}
+
+runtime::MuscleRig<double> buildMuscleRig(const MuscleSet& muscles, const Skeleton& skeleton) {
+  runtime::MuscleRig<double> rig;
+  rig.joint_count = skeleton.size();
+  for (const MusclePart& part : muscles.parts) {
+    const MuscleRestFrame rest = muscleRestFrame(part, skeleton);
+    runtime::RigMuscle<double> muscle;
+    muscle.origin_joint = part.origin.joint;
+    muscle.insertion_joint = part.insertion.joint;
+    muscle.carrier_joint = muscleCarrierJoint(part);
+    const Eigen::Affine3d& origin_bind = skeleton.bind_world[part.origin.joint];
+    const Eigen::Affine3d& insertion_bind = skeleton.bind_world[part.insertion.joint];
+    copy3(origin_bind.inverse() * rest.origin, muscle.origin_local);
+    copy3(insertion_bind.inverse() * rest.insertion, muscle.insertion_local);
+    muscle.rest_length = rest.length;
+    muscle.compression = part.compression;
+    muscle.stretch = part.stretch;
+    // Helper directions through the bind matrix (exact at the bind pose); the twist axis in the
+    // orthonormal frame the runtime reads the twist in (rotationOf()).
+    const Eigen::Matrix3d origin_inverse_linear = origin_bind.linear().inverse();
+    copy3(origin_inverse_linear * rest.fibre, muscle.fibre_local);
+    copy3(origin_inverse_linear * rest.up, muscle.up_local);
+    const Eigen::Matrix3d origin_rotation = bindRotation(skeleton, part.origin.joint);
+    copy3(origin_rotation.transpose() * rest.fibre, muscle.twist_axis_local);
+    const Eigen::Quaterniond relative(Eigen::Matrix3d(origin_rotation.transpose() *
+                                                      bindRotation(skeleton, part.insertion.joint)));
+    const Eigen::Quaterniond q = relative.normalized();
+    muscle.insertion_bind_in_origin[0] = q.x();
+    muscle.insertion_bind_in_origin[1] = q.y();
+    muscle.insertion_bind_in_origin[2] = q.z();
+    muscle.insertion_bind_in_origin[3] = q.w();
+    muscle.driver_fraction = rest.driver_fraction;
+    muscle.driver_offset[0] = rest.driver_offset.x();
+    muscle.driver_offset[1] = rest.driver_offset.y();
+    const Eigen::Matrix4d in_carrier =
+        (skeleton.bind_world[muscle.carrier_joint].inverse() * muscleBindTransform(part, skeleton)).matrix();
+    for (int k = 0; k < 16; ++k) muscle.skinned_in_carrier[k] = in_carrier.data()[k];
+    appendCurve(part.response.ratio, rest.side_sign, &rig.keys, &muscle.ratio_key_begin, &muscle.ratio_key_count);
+    appendCurve(part.response.twist, rest.side_sign, &rig.keys, &muscle.twist_key_begin, &muscle.twist_key_count);
+    rig.muscles.push_back(muscle);
+  }
+  assert(std::string(runtime::rigProblem(rig)).empty() || muscles.parts.empty());
+  return rig;
+}
+
+std::vector<double> jointMatrices(const Pose& pose) {
+  std::vector<double> matrices(16 * pose.world.size());
+  for (size_t j = 0; j < pose.world.size(); ++j) {
+    const Eigen::Matrix4d m = pose.world[j].matrix();
+    std::copy(m.data(), m.data() + 16, matrices.begin() + 16 * j);
+  }
+  return matrices;
+}
+
+RigEvaluation evaluateRig(const runtime::MuscleRig<double>& rig, const Pose& pose, bool with_helpers) {
+  RigEvaluation out;
+  const std::vector<double> joints = jointMatrices(pose);
+  out.skinned.assign(16 * rig.muscles.size(), 0.0);
+  if (with_helpers) out.helpers.assign(48 * rig.muscles.size(), 0.0);
+  out.drivers.resize(rig.muscles.size());
+  runtime::MuscleRigJob<double> job;
+  job.rig = &rig;
+  job.joint_matrices = runtime::Span<const double>(joints.data(), joints.size());
+  job.skinned_matrices = runtime::Span<double>(out.skinned);
+  job.helper_matrices = runtime::Span<double>(out.helpers);
+  job.drivers = runtime::Span<runtime::MuscleDrivers<double>>(out.drivers);
+  const bool ran = job.Run();
+  assert(ran);
+  (void)ran;
+  return out;
+}
+
+Eigen::Affine3d matrixAt(const std::vector<double>& matrices, size_t index) {
+  Eigen::Affine3d m;
+  m.matrix() = Eigen::Map<const Eigen::Matrix4d>(matrices.data() + 16 * index);
+  return m;
+}
+
+MuscleJointState evaluateMuscle(const MusclePart& part, const Skeleton& skeleton, const Pose& pose) {
+  assert(static_cast<int>(pose.world.size()) == skeleton.size());
+  MuscleSet one;
+  one.parts.push_back(part);
+  const runtime::MuscleRig<double> rig = buildMuscleRig(one, skeleton);
+  const RigEvaluation evaluation = evaluateRig(rig, pose, true);
+  const runtime::MuscleDrivers<double>& drivers = evaluation.drivers[0];
+  const runtime::ResponseKey<double> response = runtime::evaluateResponse(rig, rig.muscles[0], drivers);
+  MuscleJointState state;
+  state.base = matrixAt(evaluation.helpers, 0);
+  state.tip = matrixAt(evaluation.helpers, 1);
+  state.driver = matrixAt(evaluation.helpers, 2);
+  state.origin = state.base.translation();
+  state.insertion = state.tip.translation();
+  state.rest_length = rig.muscles[0].rest_length;
+  state.length = (state.insertion - state.origin).norm();
+  state.ratio = drivers.ratio;
+  state.clamped_ratio = drivers.clamped_ratio;
+  state.twist = drivers.twist;
+  state.offset_up = response.up;
+  state.offset_side = response.side;
+  state.scale = response.scale;
+  state.skinned = matrixAt(evaluation.skinned, 0);
+  return state;
 }
 
 Eigen::Affine3d skinnedLocalTransform(const MuscleJointState& state, const Pose& pose, int parent_joint) {

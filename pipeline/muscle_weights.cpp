@@ -96,64 +96,103 @@ std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part)
   return path;
 }
 
-InfluenceSet addMuscleInfluences(const MeshPart& part, const InfluenceSet& base, const SurfaceGraph& surface,
-                                 const Skeleton& skeleton, const MuscleSet& muscles,
-                                 const std::vector<int>& muscle_joints, const std::vector<double>& radii,
-                                 const MuscleWeightOptions& options) {
-  assert(muscle_joints.size() == muscles.parts.size() && radii.size() == muscles.parts.size());
-  const int vertex_count = base.vertexCount();
-  const int muscle_count = static_cast<int>(muscles.parts.size());
-
-  // Share of each muscle per welded vertex, smoothed on the surface.
+MuscleShares muscleShares(const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
+                          const std::vector<double>& radii, const MuscleWeightOptions& options) {
+  assert(radii.size() == muscles.parts.size());
   std::vector<Eigen::Vector3d> welded_position(surface.weldedCount());
-  for (int v = vertex_count - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
-  std::vector<std::vector<double>> share(muscle_count);
-  std::vector<std::vector<char>> spans(muscle_count, std::vector<char>(skeleton.size(), 0));
-  for (int m = 0; m < muscle_count; ++m) {
+  for (int v = static_cast<int>(part.positions.size()) - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
+  MuscleShares share(muscles.parts.size());
+  for (size_t m = 0; m < muscles.parts.size(); ++m) {
     const MusclePart& muscle = muscles.parts[m];
-    const double radius = radii[m];
     share[m].assign(surface.weldedCount(), 0.0);
     for (int w = 0; w < surface.weldedCount(); ++w) {
       share[m][w] = options.peak_share *
-                    falloff(distanceToSegment(welded_position[w], muscle.origin.world, muscle.insertion.world), radius);
+                    falloff(distanceToSegment(welded_position[w], muscle.origin.world, muscle.insertion.world), radii[m]);
     }
     smooth(&share[m], surface, options);
-    for (int joint : spannedJoints(skeleton, muscle)) spans[m][joint] = 1;
   }
+  return share;
+}
 
-  // Each vertex gives muscle m that share of the weight it puts on the joints m spans.
+void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGraph>& surfaces,
+                         const std::vector<MuscleShares>& shares, MuscleSet* muscles) {
+  const Skeleton& skeleton = character.skeleton;
+  for (size_t m = 0; m < muscles->parts.size(); ++m) {
+    MusclePart& muscle = muscles->parts[m];
+    if (muscle.carrier >= 0) continue;
+    std::vector<double> mass(skeleton.size(), 0.0);
+    std::vector<char> spans(skeleton.size(), 0);
+    for (int joint : spannedJoints(skeleton, muscle)) spans[joint] = 1;
+    size_t p = 0;
+    for (const MeshPart& part : character.meshes) {
+      if (!part.skinned || part.positions.empty()) continue;
+      const std::vector<double>& share = shares[p][m];
+      const std::vector<int>& weld = surfaces[p].weld_of_vertex;
+      ++p;
+      const int slots = part.influences_per_vertex;
+      for (size_t v = 0; v < part.positions.size(); ++v) {
+        const double s = share[weld[v]];
+        if (s <= 0.0) continue;
+        for (int k = 0; k < slots; ++k) {
+          const int joint = part.joints[v * slots + k];
+          if (spans[joint]) mass[joint] += s * part.weights[v * slots + k];
+        }
+      }
+    }
+    int best = muscle.origin.joint;
+    double best_mass = 0.0;
+    for (int j = 0; j < skeleton.size(); ++j) {
+      if (mass[j] > best_mass) {
+        best_mass = mass[j];
+        best = j;
+      }
+    }
+    muscle.carrier = best;
+  }
+}
+
+InfluenceSet addMuscleInfluences(const InfluenceSet& base, const SurfaceGraph& surface, const MuscleShares& shares,
+                                 const MuscleSet& muscles, const std::vector<int>& muscle_joints,
+                                 const MuscleWeightOptions& options) {
+  assert(muscle_joints.size() == muscles.parts.size() && shares.size() == muscles.parts.size());
+  const int vertex_count = base.vertexCount();
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+
   std::vector<std::vector<std::pair<int, double>>> rows(vertex_count);
   int widest = 0;
   for (int v = 0; v < vertex_count; ++v) {
     const int weld = surface.weld_of_vertex[v];
-    std::vector<double> taken(muscle_count, 0.0);
     // The strongest muscles here, as many as the influence budget leaves room for (ties: file order).
     int existing = 0;
     for (int k = 0; k < base.slots_per_vertex; ++k) existing += base.weights[v * base.slots_per_vertex + k] > 0.0;
     std::vector<int> order;
     for (int m = 0; m < muscle_count; ++m) {
-      if (share[m][weld] > 0.0) order.push_back(m);
+      if (shares[m][weld] > 0.0) order.push_back(m);
     }
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return share[a][weld] > share[b][weld]; });
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return shares[a][weld] > shares[b][weld]; });
     const size_t room = static_cast<size_t>(std::max(0, options.max_influences - existing));
     std::vector<double> share_here(muscle_count, 0.0);
-    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[order[i]] = share[order[i]][weld];
-    double total = 0.0;
-    for (int m = 0; m < muscle_count; ++m) total += share_here[m];
-    const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
+    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[order[i]] = shares[order[i]][weld];
+    std::vector<double> taken(muscle_count, 0.0);
     std::vector<std::pair<int, double>>& row = rows[v];
     for (int k = 0; k < base.slots_per_vertex; ++k) {
       const int joint = base.joints[v * base.slots_per_vertex + k];
-      double weight = base.weights[v * base.slots_per_vertex + k];
+      const double weight = base.weights[v * base.slots_per_vertex + k];
       if (weight <= 0.0) continue;
+      // The muscles riding this joint share at most max_total_share of its weight here.
+      double total = 0.0;
+      for (int m = 0; m < muscle_count; ++m) {
+        if (muscles.parts[m].carrier == joint) total += share_here[m];
+      }
+      const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
       double given = 0.0;
       for (int m = 0; m < muscle_count; ++m) {
-        if (!spans[m][joint]) continue;
-        double amount = weight * share_here[m] * limit;
+        if (muscles.parts[m].carrier != joint || share_here[m] <= 0.0) continue;
+        const double amount = weight * share_here[m] * limit;
         taken[m] += amount;
         given += amount;
       }
-      row.emplace_back(joint, weight - given);
+      if (weight - given > 0.0) row.emplace_back(joint, weight - given);
     }
     for (int m = 0; m < muscle_count; ++m) {
       if (taken[m] > 0.0) row.emplace_back(muscle_joints[m], taken[m]);

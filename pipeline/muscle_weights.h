@@ -1,6 +1,8 @@
 // Skin weights for the muscles' skinned joints (the talk: "+26 skinned joints"). Each muscle takes a
-// share of the weight of the joints it spans, around its origin-insertion segment, so the bind pose is
-// unchanged; the share is smoothed over the welded mesh surface. docs/muscle-model.md, "Weights".
+// share, around its origin-insertion segment and smoothed over the welded mesh surface, of the weight
+// its carrier joint has there: the carrier is the joint the skinned joint rides, so at rest response a
+// vertex moves exactly as the input skinning moves it, and the bind pose is unchanged.
+// docs/muscle-weights.md.
 #pragma once
 
 #include <vector>
@@ -12,8 +14,8 @@
 namespace rigbake {
 
 struct MuscleWeightOptions {
-  double peak_share = 0.5;         // at the muscle's axis a muscle takes this share of its joints' weight
-  double max_total_share = 0.6;    // all muscles together take at most this share at any vertex
+  double peak_share = 1.0;         // at the muscle's axis a muscle takes this share of its carrier's weight
+  double max_total_share = 1.0;    // all muscles together take at most this share of a joint's weight
   int smoothing_iterations = 4;    // Laplacian (umbrella) passes over the welded surface
   double smoothing_lambda = 0.5;   // step of each pass
   // Most influences a vertex may end with (the talk's God of War Ragnarök maximum): only the strongest
@@ -31,12 +33,25 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
 // The joints a muscle spans: the skeleton path from its origin joint to its insertion joint.
 std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part);
 
-// `base` are the part's influences; muscle m becomes skeleton joint muscle_joints[m]. Returns the
-// influences with the muscles added (more slots per vertex), each vertex still summing to its old sum.
-// `radii` from muscleWeightRadii().
-InfluenceSet addMuscleInfluences(const MeshPart& part, const InfluenceSet& base, const SurfaceGraph& surface,
-                                 const Skeleton& skeleton, const MuscleSet& muscles,
-                                 const std::vector<int>& muscle_joints, const std::vector<double>& radii,
+// share[m][w]: how much of its carrier's weight muscle m may take at welded vertex w, before the
+// influence budget: peak_share * (1 - x^2)^2 with x = distance to the segment / radius, smoothed.
+using MuscleShares = std::vector<std::vector<double>>;
+MuscleShares muscleShares(const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
+                          const std::vector<double>& radii, const MuscleWeightOptions& options = {});
+
+// Each part's carrier: among the joints it spans, the one whose weight its share field covers most,
+// summed over every skinned mesh part (lowest joint index on a tie). A part whose carrier is already
+// set (part.carrier >= 0) keeps it. surfaces[p] and shares[p] belong to the p-th skinned mesh part
+// with positions.
+void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGraph>& surfaces,
+                         const std::vector<MuscleShares>& shares, MuscleSet* muscles);
+
+// `base` are the part's influences; muscle m becomes skeleton joint muscle_joints[m] and takes
+// share * limit of the weight the vertex has on muscle m's carrier joint (limit keeps the muscles on
+// one joint within max_total_share). Returns the influences with the muscles added (more slots per
+// vertex), each vertex still summing to its old sum. Every part must have its carrier chosen.
+InfluenceSet addMuscleInfluences(const InfluenceSet& base, const SurfaceGraph& surface, const MuscleShares& shares,
+                                 const MuscleSet& muscles, const std::vector<int>& muscle_joints,
                                  const MuscleWeightOptions& options = {});
 
 }  // namespace rigbake

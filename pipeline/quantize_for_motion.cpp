@@ -30,13 +30,13 @@ namespace {
 
 constexpr double kRefineShare = 0.5;
 
-struct Slot {
+struct RoundingSlot {
   int joint = 0;
   int units = 0;
 };
 
-void writeCanonical(std::vector<Slot> slots, int slots_per_vertex, int vertex, QuantizedInfluences* out) {
-  std::sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
+void writeCanonical(std::vector<RoundingSlot> slots, int slots_per_vertex, int vertex, QuantizedInfluences* out) {
+  std::sort(slots.begin(), slots.end(), [](const RoundingSlot& a, const RoundingSlot& b) {
     if ((a.units == 0) != (b.units == 0)) return a.units != 0;
     if (a.units != b.units) return a.units > b.units;
     return a.joint < b.joint;
@@ -169,8 +169,8 @@ double worstFrameError(const VertexMotion& motion, const std::vector<int>& units
 
 void writeUnits(const VertexMotion& motion, const std::vector<int>& units, int slots, int v,
                 QuantizedInfluences* out) {
-  std::vector<Slot> chosen(slots);
-  for (size_t i = 0; i < units.size(); ++i) chosen[i] = Slot{motion.joints[i], units[i]};
+  std::vector<RoundingSlot> chosen(slots);
+  for (size_t i = 0; i < units.size(); ++i) chosen[i] = RoundingSlot{motion.joints[i], units[i]};
   writeCanonical(chosen, slots, v, out);
 }
 

@@ -31,7 +31,7 @@ TEST_CASE("bake: Blender imports every baked file with the muscle bones and thei
     options.gltf_weights = weights[i];
     BakeResult bake = bakeCharacter(loaded.character, muscles, options);
     std::string out = dir / ("baked" + std::to_string(i) + ".glb");
-    writeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), out);
+    writeGltf(bakedModel(*loaded.document, loaded.character, bake), out);
     baked_paths.push_back(out);
     std::vector<std::string> bones;
     for (const MusclePart& part : muscles.parts) bones.push_back(muscleJointName(part, MuscleJointRole::kSkinned));

@@ -38,7 +38,7 @@ BakedCharacter bakeFile(const std::string& path, int influences, GltfWeights glt
   options.influences = influences;
   options.gltf_weights = gltf_weights;
   baked.bake = bakeCharacter(baked.loaded.character, baked.muscles, options);
-  baked.bytes = serializeGltf(bakedModel(*baked.loaded.document, baked.loaded.character, baked.muscles, baked.bake), true);
+  baked.bytes = serializeGltf(bakedModel(*baked.loaded.document, baked.loaded.character, baked.bake), true);
   return baked;
 }
 
@@ -97,10 +97,14 @@ TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy,
     Character c = loadCharacter(dir / "b.glb").character;
     const Skeleton& before = baked.loaded.character.skeleton;
     CHECK(c.skeleton.size() == before.size() + 28);  // the skinned joints are skin joints now
-    for (const MusclePart& part : baked.muscles.parts) {
+    for (const MusclePart& part : baked.bake.muscles.parts) {
       int skinned = c.skeleton.find(muscleJointName(part, MuscleJointRole::kSkinned));
       REQUIRE(skinned >= 0);
-      CHECK(c.skeleton.names[c.skeleton.parents[skinned]] == before.names[part.origin.joint]);
+      // The skinned joint rides its carrier, one of the joints the muscle spans.
+      REQUIRE(part.carrier >= 0);
+      CHECK(c.skeleton.names[c.skeleton.parents[skinned]] == before.names[part.carrier]);
+      const std::vector<int> spanned = spannedJoints(before, part);
+      CHECK(std::find(spanned.begin(), spanned.end(), part.carrier) != spanned.end());
     }
     for (const MeshPart& mesh : c.meshes) {
       if (!mesh.skinned) continue;
@@ -140,7 +144,7 @@ TEST_CASE("bake: at the bind pose the baked skin reproduces the original vertice
       int source = original.find(reloaded.skeleton.names[j]);
       if (source >= 0) skin[j] = original.bind_world[source] * reloaded.skeleton.bind_world[j].inverse();
     }
-    for (const MusclePart& part : baked.muscles.parts) {
+    for (const MusclePart& part : baked.bake.muscles.parts) {
       int j = reloaded.skeleton.find(muscleJointName(part, MuscleJointRole::kSkinned));
       skin[j] = evaluateMuscle(part, original, bind).skinned * reloaded.skeleton.bind_world[j].inverse();
     }
@@ -228,7 +232,7 @@ TEST_CASE("bake: each clip's reported peak is the vertex and time where the roun
       for (int j = 0; j < skeleton.size(); ++j) skin.push_back(skinMatrix(pose, skeleton, j));
       for (size_t m = 0; m < baked.muscles.parts.size(); ++m) {
         const BakedJoint& joint = baked.bake.joints[baked.bake.skinned_joint_of_muscle[m]];
-        skin.push_back(evaluateMuscle(baked.muscles.parts[m], skeleton, pose).skinned * joint.bind_world.inverse());
+        skin.push_back(evaluateMuscle(baked.bake.muscles.parts[m], skeleton, pose).skinned * joint.bind_world.inverse());
       }
       double largest = 0.0, at_peak = -1.0;
       for (const BakedPart& part : baked.bake.parts) {

@@ -20,6 +20,7 @@ def main(repo: pathlib.Path) -> int:
     checks += [("landmark_rules.schema.json", repo / "presets" / "landmarks.json")]
     checks += [("muscle_preset.schema.json", p) for p in sorted((repo / "presets" / "muscles").glob("*.json"))]
     checks += [("jiggle_preset.schema.json", p) for p in sorted((repo / "presets" / "jiggle").glob("*.json"))]
+    checks += [("body_regions.schema.json", p) for p in sorted((repo / "presets" / "regions").glob("*.json"))]
     checks += [("build_manifest.schema.json", repo / "examples" / "build_manifest.json")]
     failures = 0
     for schema, path in checks:

@@ -23,7 +23,10 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
                        (dir / "stats.json") + " --packed-out " + (dir / "baked.rbpk"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  CHECK(lineCount(r.err) == 2);  // the summary line and where the largest error is
+  // The summary line, where the largest error is, the response fit, and the volume per clip.
+  CHECK(lineCount(r.err) == 6);
+  CHECK(r.err.find("response fitted: 28 muscles") != std::string::npos);
+  CHECK(r.err.find("volume in 'ElbowFlexion': input skinning -0.74 %, dual quaternions -0.06 %") != std::string::npos);
   CHECK(r.err.find("largest error at vertex ") != std::string::npos);
   nlohmann::json stats = nlohmann::json::parse(slurp(dir / "stats.json"));
   CHECK(stats["influences"] == 10);

@@ -445,7 +445,8 @@ TEST_CASE("jiggle: a muscle jiggle driven by the bake's world transforms") {
       resolveJiggles(readJigglePreset(test::presetsDir() + "/jiggle/biceps.json"), skeleton, &r.landmarks, &muscles);
   const JiggleSetup& left = biceps[0];
   const MusclePart& part = muscles.parts[left.muscle];
-  const Clip& clip = clipNamed(r.character, "ElbowFlexion");
+  // The skinned joint rides its carrier (the upper arm): the arm swinging up is what shakes it.
+  const Clip& clip = clipNamed(r.character, "ArmRaise");
   std::vector<JiggleTrack> runs;
   for (double fps : {30.0, 120.0}) {
     const std::vector<double> times = sampleTimes(clip, fps);
@@ -454,7 +455,7 @@ TEST_CASE("jiggle: a muscle jiggle driven by the bake's world transforms") {
     for (double time : frame_times) {
       const Pose pose = sampleClip(skeleton, clip, time);
       JiggleFrame frame;
-      frame.parent = pose.world[muscleParentJoint(part)];
+      frame.parent = pose.world[muscleCarrierJoint(part)];
       frame.root = pose.world[left.root];
       frame.pivot = evaluateMuscle(part, skeleton, pose).skinned;
       frames.push_back(frame);

@@ -67,7 +67,7 @@ inline std::string bakeToFiles(const std::string& path, int influences, const st
   const std::string stem = std::filesystem::path(path).stem().string() + "-" + std::to_string(influences);
   const std::string glb = dir + "/" + stem + ".glb";
   *muscles_path = dir + "/" + stem + "-muscles.json";
-  std::ofstream(glb, std::ios::binary) << serializeGltf(bakedModel(*loaded.document, loaded.character, muscles, bake), true);
+  std::ofstream(glb, std::ios::binary) << serializeGltf(bakedModel(*loaded.document, loaded.character, bake), true);
   std::ofstream(*muscles_path, std::ios::binary) << muscleJson(muscles, loaded.character.skeleton, "gow_biped");
   return glb;
 }

@@ -1,0 +1,44 @@
+#include "formats/quality_json.h"
+
+namespace rigbake {
+namespace {
+
+nlohmann::json extremeJson(const VolumeExtreme& extreme) {
+  return {{"change_percent", 100.0 * extreme.change}, {"time_s", extreme.time}};
+}
+
+nlohmann::json volumesJson(const SkinningVolumes& volumes) {
+  return {{"input", extremeJson(volumes.input)},
+          {"dual_quaternion", extremeJson(volumes.dual_quaternion)},
+          {"rig", extremeJson(volumes.rig)}};
+}
+
+nlohmann::json moveJson(const MuscleSkinMove& move) {
+  if (!move.measured) return nullptr;
+  return {{"clip", move.clip},          {"time_s", move.time},
+          {"ratio", move.ratio},        {"mean_mm", 1000.0 * move.mean},
+          {"max_out_mm", 1000.0 * move.max_out}, {"max_in_mm", 1000.0 * move.max_in},
+          {"vertices", move.vertices}};
+}
+
+}  // namespace
+
+nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
+  nlohmann::json body_clips = nlohmann::json::object();
+  for (const ClipQuality& clip : quality.clips) body_clips[clip.clip] = volumesJson(clip.body);
+  nlohmann::json regions = nlohmann::json::object();
+  for (size_t r = 0; r < quality.regions.size(); ++r) {
+    nlohmann::json per_clip = nlohmann::json::object();
+    for (const ClipQuality& clip : quality.clips) per_clip[clip.clip] = volumesJson(clip.regions[r]);
+    regions[quality.regions[r]] = {{"bind_volume_m3", quality.region_volumes[r]}, {"per_clip", per_clip}};
+  }
+  nlohmann::json muscles = nlohmann::json::object();
+  for (const MuscleQuality& muscle : quality.muscles)
+    muscles[muscle.muscle] = {{"compressed", moveJson(muscle.compressed)}, {"stretched", moveJson(muscle.stretched)}};
+  return {{"units", {{"volume", "percent change against the bind pose"}, {"skin_move", "mm along the input skinning's normal, + out"}}},
+          {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
+          {"regions", regions},
+          {"muscles", muscles}};
+}
+
+}  // namespace rigbake

@@ -1,0 +1,191 @@
+// Deformation quality: volumes of skinned surfaces (pipeline/skin_volume.h) under linear blend and
+// dual-quaternion skinning (pipeline/skinning.h) and the baked rig, and the muscles' skin displacement
+// along the normal. docs/deformation-quality.md.
+#include "pipeline/deformation_quality.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "pipeline/skinning.h"
+
+namespace rigbake {
+namespace {
+
+struct PreparedPart {
+  const MeshPart* mesh = nullptr;
+  const MeasuredPart* weights = nullptr;
+  VolumeSurface surface;
+  std::vector<ClosedPatch> regions;  // one per DeformationQuality::regions entry (possibly empty)
+};
+
+void keepExtreme(double change, double time, VolumeExtreme* extreme) {
+  if (std::abs(change) > std::abs(extreme->change)) *extreme = {change, time};
+}
+
+struct FrameVolumes {
+  double body[3] = {0, 0, 0};  // input, dual quaternion, rig
+  std::vector<std::array<double, 3>> regions;
+};
+
+}  // namespace
+
+DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
+                                             const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
+                                             const std::vector<MeasuredClip>& clips) {
+  const Skeleton& skeleton = character.skeleton;
+  const int joint_count = skeleton.size();
+  DeformationQuality quality;
+  for (const BodyRegion& region : regions) quality.regions.push_back(region.name);
+
+  // Weld each part once; cut each region out of it and close it.
+  const double weld = 1e-6 * std::max(muscles.body_height, 1e-3);
+  std::vector<PreparedPart> prepared;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    PreparedPart part;
+    part.mesh = &character.meshes[parts[p].mesh_part];
+    part.weights = &parts[p];
+    part.surface = buildVolumeSurface(*part.mesh, weld);
+    std::vector<int> welded_of_part(part.mesh->triangles.size(), -1);
+    for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) welded_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
+    for (const BodyRegion& region : regions) {
+      std::vector<int> triangles;
+      if (p < region.triangles.size()) {
+        for (int t : region.triangles[p]) {
+          if (welded_of_part[t] >= 0) triangles.push_back(welded_of_part[t]);
+        }
+      }
+      part.regions.push_back(closePatch(part.surface, triangles));
+    }
+    prepared.push_back(std::move(part));
+  }
+
+  auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame) {
+    FrameVolumes out;
+    out.regions.assign(regions.size(), {0, 0, 0});
+    for (const PreparedPart& part : prepared) {
+      std::vector<Eigen::Vector3d> posed[3];
+      if (frame == nullptr) {
+        posed[0] = posed[1] = posed[2] = weldedPositions(part.surface, part.mesh->positions);
+      } else {
+        const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
+        posed[0] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, *frame));
+        posed[1] = weldedPositions(part.surface, skinDualQuaternion(part.mesh->positions, part.weights->input,
+                                                                    dualQuaternionFrame(skeleton_frame)));
+        posed[2] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, *frame));
+      }
+      for (int k = 0; k < 3; ++k) {
+        out.body[k] += enclosedVolume(part.surface.whole, posed[k]);
+        for (size_t r = 0; r < regions.size(); ++r) out.regions[r][k] += enclosedVolume(part.regions[r], posed[k]);
+      }
+    }
+    return out;
+  };
+
+  const FrameVolumes bind = volumesOf(nullptr);
+  quality.body_volume = bind.body[0];
+  for (size_t r = 0; r < regions.size(); ++r) quality.region_volumes.push_back(bind.regions[r][0]);
+  auto change = [](double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; };
+
+  // Each muscle's most compressed and most stretched sample over every clip.
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+  struct Sample {
+    int clip = -1, frame = -1;
+    double ratio = 1.0;
+  };
+  std::vector<Sample> most_compressed(muscle_count), most_stretched(muscle_count);
+
+  for (size_t c = 0; c < clips.size(); ++c) {
+    const MeasuredClip& clip = clips[c];
+    ClipQuality figures;
+    figures.clip = clip.name;
+    figures.regions.resize(regions.size());
+    double worst = -1.0;
+    for (size_t t = 0; t < clip.times.size(); ++t) {
+      const FrameVolumes volumes = volumesOf(&(*clip.frames)[t]);
+      const double time = clip.times[t];
+      keepExtreme(change(volumes.body[0], bind.body[0]), time, &figures.body.input);
+      keepExtreme(change(volumes.body[1], bind.body[1]), time, &figures.body.dual_quaternion);
+      const double rig_change = change(volumes.body[2], bind.body[2]);
+      keepExtreme(rig_change, time, &figures.body.rig);
+      if (std::abs(rig_change) > worst) {
+        worst = std::abs(rig_change);
+        figures.worst_frame = static_cast<int>(t);
+      }
+      for (size_t r = 0; r < regions.size(); ++r) {
+        keepExtreme(change(volumes.regions[r][0], bind.regions[r][0]), time, &figures.regions[r].input);
+        keepExtreme(change(volumes.regions[r][1], bind.regions[r][1]), time, &figures.regions[r].dual_quaternion);
+        keepExtreme(change(volumes.regions[r][2], bind.regions[r][2]), time, &figures.regions[r].rig);
+      }
+      for (int m = 0; m < muscle_count; ++m) {
+        const double ratio = clip.ratio[t][m];
+        if (ratio < most_compressed[m].ratio) most_compressed[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+        if (ratio > most_stretched[m].ratio) most_stretched[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+      }
+    }
+    quality.clips.push_back(std::move(figures));
+  }
+
+  // The skin's move along the input skinning's normal at those samples; posed surfaces are cached by
+  // sample, as several muscles peak together.
+  struct PosedSample {
+    std::vector<std::vector<Eigen::Vector3d>> input, rig, normals;  // per part, welded
+  };
+  std::map<std::pair<int, int>, PosedSample> cache;
+  auto posedAt = [&](const Sample& sample) -> const PosedSample& {
+    auto it = cache.find({sample.clip, sample.frame});
+    if (it != cache.end()) return it->second;
+    const std::vector<Eigen::Affine3d>& frame = (*clips[sample.clip].frames)[sample.frame];
+    PosedSample posed;
+    for (const PreparedPart& part : prepared) {
+      posed.input.push_back(weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame)));
+      posed.rig.push_back(weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame)));
+      posed.normals.push_back(vertexNormals(part.surface.whole, posed.input.back()));
+    }
+    return cache.emplace(std::make_pair(sample.clip, sample.frame), std::move(posed)).first->second;
+  };
+  auto skinMove = [&](int m, const Sample& sample, bool wanted) {
+    MuscleSkinMove move;
+    if (!wanted || sample.clip < 0) return move;
+    const PosedSample& posed = posedAt(sample);
+    double weighted = 0.0, total = 0.0;
+    for (size_t p = 0; p < prepared.size(); ++p) {
+      const PreparedPart& part = prepared[p];
+      const InfluenceSet& rig = part.weights->rig;
+      const int slots = rig.slots_per_vertex;
+      for (int w = 0; w < part.surface.weldedCount(); ++w) {
+        const int v = part.surface.vertex_of_weld[w];
+        double weight = 0.0;
+        for (int k = 0; k < slots; ++k) {
+          if (rig.joints[v * slots + k] == joint_count + m) weight += rig.weights[v * slots + k];
+        }
+        if (weight < kMuscleSkinWeight) continue;
+        const double along = (posed.rig[p][w] - posed.input[p][w]).dot(posed.normals[p][w]);
+        weighted += weight * along;
+        total += weight;
+        move.max_out = std::max(move.max_out, along);
+        move.max_in = std::max(move.max_in, -along);
+        ++move.vertices;
+      }
+    }
+    if (move.vertices == 0) return MuscleSkinMove{};
+    move.measured = true;
+    move.clip = clips[sample.clip].name;
+    move.time = clips[sample.clip].times[sample.frame];
+    move.ratio = sample.ratio;
+    move.mean = weighted / total;
+    return move;
+  };
+  for (int m = 0; m < muscle_count; ++m) {
+    MuscleQuality figures;
+    figures.muscle = muscles.parts[m].fullName();
+    figures.compressed = skinMove(m, most_compressed[m], most_compressed[m].ratio < 1.0);
+    figures.stretched = skinMove(m, most_stretched[m], most_stretched[m].ratio > 1.0);
+    quality.muscles.push_back(std::move(figures));
+  }
+  return quality;
+}
+
+}  // namespace rigbake

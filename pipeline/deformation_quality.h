@@ -1,0 +1,87 @@
+// How well skinning keeps the body's volume, the figure the muscles exist for (docs/deformation-
+// quality.md): for every clip, the volume of the whole skinned surface and of each body region against
+// the bind pose, for (a) the input's own linear blend skinning, (b) dual-quaternion skinning of the
+// input weights, the reference riggers compare with, and (c) the baked rig; and for every muscle, at
+// its most compressed and most stretched sample, how far the skin it drives moves along the surface
+// normal relative to (a): a bulge out or a deflation in.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "anatomy/body_regions.h"
+#include "anatomy/character.h"
+#include "anatomy/muscle_set.h"
+#include "pipeline/influences.h"
+#include "pipeline/quantize_for_motion.h"
+#include "pipeline/skin_volume.h"
+
+namespace rigbake {
+
+// One sampled clip as the measures see it: skin matrices of the skeleton's joints followed by the
+// muscles' skinned joints, and each muscle's clamped length ratio, per sampled time.
+struct MeasuredClip {
+  std::string name;
+  std::vector<double> times;
+  const std::vector<SkinFrame>* frames = nullptr;
+  std::vector<std::vector<double>> ratio;  // ratio[t][m], clamped
+};
+
+// A skinned mesh part and its three weight sets (skeleton indices; the muscles' skinned joints follow
+// the skeleton's joints, muscle m at skeleton.size() + m).
+struct MeasuredPart {
+  int mesh_part = -1;
+  InfluenceSet input;  // the input's weights, normalized
+  InfluenceSet rig;    // the weights written (muscles included)
+};
+
+// The volume change V(t) / V(bind) - 1 with the largest magnitude over a clip, and when.
+struct VolumeExtreme {
+  double change = 0.0;
+  double time = 0.0;
+};
+
+struct SkinningVolumes {
+  VolumeExtreme input, dual_quaternion, rig;
+};
+
+struct ClipQuality {
+  std::string clip;
+  SkinningVolumes body;
+  std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
+  int worst_frame = -1;  // the sample where the rig's whole-body change peaks
+};
+
+// Skin moved by one muscle at one sample, along the input skinning's surface normal: positive out.
+struct MuscleSkinMove {
+  bool measured = false;  // false when the muscle never reaches that side of rest, or drives no skin
+  std::string clip;
+  double time = 0.0;
+  double ratio = 1.0;
+  double mean = 0.0;      // metres, weighted by the muscle's skin weight
+  double max_out = 0.0;   // metres, the largest outward move (>= 0)
+  double max_in = 0.0;    // metres, the largest inward move (>= 0)
+  int vertices = 0;       // vertices with at least kMuscleSkinWeight of the muscle
+};
+
+struct MuscleQuality {
+  std::string muscle;
+  MuscleSkinMove compressed, stretched;
+};
+
+// A vertex counts as driven by a muscle from this skin weight up.
+constexpr double kMuscleSkinWeight = 0.05;
+
+struct DeformationQuality {
+  double body_volume = 0.0;  // bind pose, cubic scene units
+  std::vector<std::string> regions;
+  std::vector<double> region_volumes;  // bind pose
+  std::vector<ClipQuality> clips;
+  std::vector<MuscleQuality> muscles;
+};
+
+DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
+                                             const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
+                                             const std::vector<MeasuredClip>& clips);
+
+}  // namespace rigbake

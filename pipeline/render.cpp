@@ -1,0 +1,92 @@
+// Scanline-free triangle rasterization by edge functions over each triangle's pixel bounding box
+// (Pineda, "A Parallel Algorithm for Polygon Rasterization", SIGGRAPH 1988), a depth buffer, and
+// Lambertian shading with interpolated vertex normals. The diverging heatmap palette is Moreland's
+// "cool to warm" ("Diverging Color Maps for Scientific Visualization", ISVC 2009) end points.
+#include "pipeline/render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace rigbake {
+
+Eigen::Vector3f divergingColour(double value) {
+  const double t = std::clamp(value, -1.0, 1.0);
+  const Eigen::Vector3d cool(0.230, 0.299, 0.754), white(0.95, 0.95, 0.95), warm(0.706, 0.016, 0.150);
+  const Eigen::Vector3d colour = t < 0 ? white + (cool - white) * (-t) : white + (warm - white) * t;
+  return colour.cast<float>();
+}
+
+RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera& camera, int width, int height) {
+  RgbImage image;
+  image.width = width;
+  image.height = height;
+  image.pixels.assign(static_cast<size_t>(width) * height * 3, 255);
+  std::vector<double> depth(static_cast<size_t>(width) * height, std::numeric_limits<double>::infinity());
+  const Eigen::Vector3d forward = camera.forward.normalized();
+  const Eigen::Vector3d up = (camera.up - camera.up.dot(forward) * forward).normalized();
+  const Eigen::Vector3d right = forward.cross(up);
+  const double pixels_per_unit = 0.5 * height / camera.half_height;
+  // Light from the viewer's upper left, a little in front.
+  const Eigen::Vector3d light = (-forward + 0.5 * up - 0.4 * right).normalized();
+
+  for (const RenderSurface& surface : surfaces) {
+    const std::vector<Eigen::Vector3d>& positions = *surface.positions;
+    // Screen coordinates, and area-weighted vertex normals for smooth shading.
+    std::vector<Eigen::Vector3d> screen(positions.size());
+    for (size_t v = 0; v < positions.size(); ++v) {
+      const Eigen::Vector3d d = positions[v] - camera.centre;
+      screen[v] = {0.5 * width + d.dot(right) * pixels_per_unit, 0.5 * height - d.dot(up) * pixels_per_unit, d.dot(forward)};
+    }
+    std::vector<Eigen::Vector3d> normals(positions.size(), Eigen::Vector3d::Zero());
+    for (const auto& t : *surface.triangles) {
+      const Eigen::Vector3d n = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
+      for (int k = 0; k < 3; ++k) normals[t[k]] += n;
+    }
+    for (Eigen::Vector3d& n : normals) {
+      const double length = n.norm();
+      if (length > 0) n /= length;
+    }
+    for (const auto& t : *surface.triangles) {
+      const Eigen::Vector3d& a = screen[t[0]];
+      const Eigen::Vector3d& b = screen[t[1]];
+      const Eigen::Vector3d& c = screen[t[2]];
+      const double area = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
+      if (area == 0.0) continue;
+      const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
+      const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
+      const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
+      const int y1 = std::min(height - 1, static_cast<int>(std::ceil(std::max({a.y(), b.y(), c.y()}))));
+      for (int y = y0; y <= y1; ++y) {
+        for (int x = x0; x <= x1; ++x) {
+          const double px = x + 0.5, py = y + 0.5;
+          double w0 = ((b.x() - px) * (c.y() - py) - (c.x() - px) * (b.y() - py)) / area;
+          double w1 = ((c.x() - px) * (a.y() - py) - (a.x() - px) * (c.y() - py)) / area;
+          double w2 = 1.0 - w0 - w1;
+          if (w0 < 0 || w1 < 0 || w2 < 0) continue;
+          const double z = w0 * a.z() + w1 * b.z() + w2 * c.z();
+          const size_t index = static_cast<size_t>(y) * width + x;
+          if (!(z < depth[index])) continue;
+          depth[index] = z;
+          Eigen::Vector3d normal = (w0 * normals[t[0]] + w1 * normals[t[1]] + w2 * normals[t[2]]).normalized();
+          double facing = 1.0;
+          if (normal.dot(forward) > 0) {  // the side facing away from the viewer: light its inside
+            normal = -normal;
+            facing = 0.7;
+          }
+          const double lambert = 0.25 + 0.75 * std::max(0.0, normal.dot(light));
+          Eigen::Vector3d base(0.82, 0.82, 0.80);
+          if (surface.colours) {
+            const auto& colours = *surface.colours;
+            base = (w0 * colours[t[0]] + w1 * colours[t[1]] + w2 * colours[t[2]]).cast<double>();
+          }
+          const Eigen::Vector3d shaded = (base * lambert * facing).cwiseMin(1.0).cwiseMax(0.0);
+          for (int k = 0; k < 3; ++k) image.pixels[index * 3 + k] = static_cast<std::uint8_t>(std::lround(shaded[k] * 255.0));
+        }
+      }
+    }
+  }
+  return image;
+}
+
+}  // namespace rigbake

@@ -1,0 +1,55 @@
+// Volume of a skinned surface, the figure that says whether skinning keeps the body's volume
+// (docs/deformation-quality.md gives the equations). Split vertices (UV seams, hard edges) are welded
+// by position, and every opening of a surface is closed by a fan around its boundary's centroid, so
+// that open meshes, multi-part characters and pieces cut out of a body (a region: the upper arm is a
+// tube, closed at both ends) all enclose a volume.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+#include "anatomy/character.h"
+
+namespace rigbake {
+
+// Triangles over welded vertices with the boundary loops that close them.
+struct ClosedPatch {
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<std::vector<int>> holes;  // boundary loops, welded indices, ordered so caps face outwards
+};
+
+// A mesh part's triangles over welded vertices.
+struct VolumeSurface {
+  std::vector<int> weld_of_vertex;    // part vertex -> welded vertex
+  std::vector<int> vertex_of_weld;    // welded vertex -> its first part vertex
+  std::vector<int> part_triangle;     // welded triangle -> index in MeshPart::triangles
+  ClosedPatch whole;                  // every non-degenerate triangle, and the part's own holes
+  int weldedCount() const { return static_cast<int>(vertex_of_weld.size()); }
+};
+
+// Welds vertices closer than `weld_tolerance` (scene units, on a grid of that size, as
+// formats/surface_graph.h does); drops triangles that welding makes degenerate.
+VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance);
+
+// The given welded triangles (indices into surface.whole.triangles) and their boundary loops: edges
+// used by one of them only. Edges shared by three or more triangles are left as they are.
+ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles);
+
+// Posed positions of the welded vertices, from the part's per-vertex positions.
+std::vector<Eigen::Vector3d> weldedPositions(const VolumeSurface& surface, const std::vector<Eigen::Vector3d>& positions);
+
+// Signed enclosed volume: sum over triangles and cap triangles of a . (b x c) / 6 (about the patch's
+// first vertex), each hole capped by the fan from its boundary's mean position. Positive for
+// counter-clockwise (outward-facing) triangles.
+double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
+
+// dV/dp for every welded vertex: the gradient of enclosedVolume(), for fitting. A cap's centre moves
+// with its loop, so each loop vertex gets its share of the centre's gradient.
+void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
+                       std::vector<Eigen::Vector3d>* gradient);
+
+// Area-weighted vertex normals of the welded triangles (unit; zero for a vertex on no triangle).
+std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
+
+}  // namespace rigbake

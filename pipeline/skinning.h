@@ -1,0 +1,37 @@
+// Skinning a mesh part for measurement: linear blend skinning (what glTF specifies and every engine
+// does) and dual-quaternion skinning (the reference riggers compare volume with). Both take the same
+// skin matrices as the rest of the pipeline: frame[j] maps a bind-pose world position to its posed
+// world position through joint j (pipeline/pose.h skinMatrix()).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "pipeline/influences.h"
+
+namespace rigbake {
+
+// p' = sum_k w_k M_{j_k} p, written as p + sum_k w_k (M_{j_k} p - p) so that the bind pose gives p
+// exactly. Weights are used as given (normalize them first if they do not sum to 1).
+std::vector<Eigen::Vector3d> skinLinearBlend(const std::vector<Eigen::Vector3d>& bind_positions,
+                                             const InfluenceSet& influences,
+                                             const std::vector<Eigen::Affine3d>& frame);
+
+// Each skin matrix split once per frame into what dual quaternions blend (rotation and translation)
+// and what they cannot (the symmetric stretch of the polar decomposition, M = T R S).
+struct DualQuaternionFrame {
+  std::vector<Eigen::Quaterniond> real;  // rotation R, hemisphere of the first joint's is chosen per vertex
+  std::vector<Eigen::Quaterniond> dual;  // 0.5 t R as a pure quaternion product
+  std::vector<Eigen::Matrix3d> stretch;  // S; the identity for rigid joints
+};
+DualQuaternionFrame dualQuaternionFrame(const std::vector<Eigen::Affine3d>& frame);
+
+// Dual-quaternion linear blending (Kavan, Collins, Zara, O'Sullivan, "Geometric Skinning with
+// Approximate Dual Quaternion Blending", ACM TOG 27(4), 2008): blend the unit dual quaternions with the
+// vertex's weights, flipping each into the hemisphere of the vertex's strongest joint, normalize, and
+// apply. Non-rigid joints follow the paper's section 4.1: their stretch S is blended linearly and
+// applied first, in bind space.
+std::vector<Eigen::Vector3d> skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions,
+                                                const InfluenceSet& influences, const DualQuaternionFrame& frame);
+
+}  // namespace rigbake
