@@ -8,10 +8,13 @@
 #   blender            blender (+ blender-data: the io_scene_gltf2 add-on; python3-numpy: its importer
 #                      imports numpy, and neither blender nor blender-data depends on or recommends it)
 #   chromium           chromium (fonts come through libfontconfig1 -> fontconfig-config -> fonts-dejavu-core)
-#   node               nodejs (any vendor's) and the Khronos validator in .tools/ (scripts/install-validator.sh)
+#   node               nodejs (any vendor's) and the npm tools in .tools/ (scripts/install-validator.sh,
+#                      scripts/install-gltf-transform.sh)
 #   glslangValidator   glslang-tools
 #   /usr/bin/python3   python3 + python3-jsonschema (tests/check_preset_schemas.py); python3 for the XML check
 #   ninja              ninja-build (cli_build_test runs the emitted Ninja file)
+#   gltfpack           gltfpack (compressed inputs: EXT_meshopt_compression, KHR_mesh_quantization)
+#   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression)
 #
 # Prints one line per problem on stderr and exits 1 when there is any; prints one summary line and
 # exits 0 otherwise.
@@ -28,7 +31,8 @@ missing() {
 
 have() { command -v "$1" >/dev/null 2>&1; }
 
-# One triangle, buffer embedded: small enough to write here, real enough for the validator to read.
+# One triangle, buffer embedded: small enough to write here, real enough for the validator, gltfpack
+# and glTF-Transform to read, process and write.
 cat >"$work/triangle.gltf" <<'EOF'
 {"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
  "meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
@@ -103,6 +107,22 @@ else
       case "$last" in *install-validator*) hint="" ;; *) hint=" (run scripts/install-validator.sh)" ;; esac
       missing "node cannot run the Khronos glTF-Validator: $last$hint" ;;
   esac
+  # glTF-Transform writes a Draco-compressed copy of the triangle (its draco3dgltf encoder runs in node).
+  gltf_transform="${RIGBAKE_GLTF_TRANSFORM:-$repo/.tools/gltf-transform/node_modules/.bin/gltf-transform}"
+  if [ ! -x "$gltf_transform" ]; then
+    missing "gltf-transform is not installed at $gltf_transform (run scripts/install-gltf-transform.sh)"
+  elif ! timeout 120 "$gltf_transform" draco "$work/triangle.gltf" "$work/triangle-draco.glb" >"$work/gltf-transform.log" 2>&1 ||
+       ! grep -q KHR_draco_mesh_compression "$work/triangle-draco.glb"; then
+    missing "gltf-transform draco fails: $(grep -v '^$' "$work/gltf-transform.log" | tail -n 1) (run scripts/install-gltf-transform.sh)"
+  fi
+fi
+
+# gltfpack: writes an EXT_meshopt_compression copy of the triangle.
+if ! have gltfpack; then
+  missing "gltfpack is not on PATH (Debian package gltfpack)"
+elif ! timeout 60 gltfpack -i "$work/triangle.gltf" -o "$work/triangle-meshopt.glb" -c >"$work/gltfpack.log" 2>&1 ||
+     ! grep -q EXT_meshopt_compression "$work/triangle-meshopt.glb"; then
+  missing "gltfpack -c fails: $(grep -v '^$' "$work/gltfpack.log" | tail -n 1) (Debian package gltfpack)"
 fi
 
 # glslangValidator compiles a trivial shader.
@@ -132,4 +152,4 @@ fi
 if [ "$problems" -gt 0 ]; then
   exit 1
 fi
-echo "check-tools: blender, chromium, node + gltf-validator, glslang, python3, ninja all run" >&2
+echo "check-tools: blender, chromium, node + gltf-validator + gltf-transform, gltfpack, glslang, python3, ninja all run" >&2
