@@ -17,6 +17,12 @@ const std::vector<HonouredExtension>& honouredExtensions() {
       {"KHR_mesh_quantization", ExtensionHandling::kRead,
        "Integer and normalized-integer positions, normals, texture coordinates, weights and animation "
        "values are dequantized on load. Outputs keep the file's accessors quantized and the extension required."},
+      {"EXT_meshopt_compression", ExtensionHandling::kDecoded,
+       "Compressed buffer views (ATTRIBUTES, TRIANGLES, INDICES; filters OCTAHEDRAL, QUATERNION, EXPONENTIAL) are "
+       "decoded with meshoptimizer on load; outputs are written uncompressed, without the extension."},
+      {"KHR_draco_mesh_compression", ExtensionHandling::kDecoded,
+       "Compressed primitives are decoded with Draco on load; outputs are written uncompressed, without the "
+       "extension."},
       {"KHR_texture_transform", ExtensionHandling::kPassedThrough,
        "rigbake never samples textures; materials and texture coordinates are written as they were."},
       {"KHR_texture_basisu", ExtensionHandling::kPassedThrough,
@@ -38,7 +44,8 @@ const std::vector<HonouredExtension>& honouredExtensions() {
       {"KHR_materials_diffuse_transmission", ExtensionHandling::kPassedThrough, "Materials are written as they were."},
       {"KHR_materials_variants", ExtensionHandling::kPassedThrough,
        "Variants and each primitive's mappings are written as they were (the bake only replaces JOINTS_n/WEIGHTS_n)."},
-      {"KHR_lights_punctual", ExtensionHandling::kPassedThrough, "Lights and the nodes' references to them are written as they were."},
+      {"KHR_lights_punctual", ExtensionHandling::kPassedThrough,
+       "Lights and the nodes' references to them are written as they were."},
       {"KHR_xmp_json_ld", ExtensionHandling::kPassedThrough, "Metadata is written as it was."},
       {"VRM", ExtensionHandling::kRead,
        "VRM 0.x: humanoid.humanBones map landmarks (presets/skeletons/vrm_humanoid.json); bake --jiggle adds "

@@ -16,6 +16,7 @@
 #include "formats/gltf_json_value.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_accessor.h"
+#include "formats/gltf_decompress.h"
 #include "formats/gltf_document.h"
 #include "formats/gltf_extensions.h"
 
@@ -422,6 +423,7 @@ void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint
 
 LoadedCharacter loadCharacter(const std::string& path) {
   std::string bytes = readFile(path);
+  prepareCompressedGltf(&bytes);
   auto document = std::make_shared<GltfDocument>();
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepImageBytes, nullptr);
@@ -442,8 +444,9 @@ LoadedCharacter loadCharacter(const std::string& path) {
     requireHonouredExtensions(requiredExtensionsOf(bytes), path);
     fail("GLTF_PARSE_FAILED", path, firstLine(err));
   }
+  requireHonouredExtensions(document->model.extensionsRequired, path);
+  decompressGltf(&document->model, path);
   const tinygltf::Model& model = document->model;
-  requireHonouredExtensions(model.extensionsRequired, path);
   if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
 
   NodeTree tree = buildNodeTree(model, path);

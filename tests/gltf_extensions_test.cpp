@@ -9,6 +9,7 @@
 
 #include "anatomy/error.h"
 #include "cli_support.h"
+#include "glb_support.h"
 
 using namespace rigbake;
 using namespace rigbake::test;
@@ -48,12 +49,6 @@ std::string glbWithJsonChunk(const std::string& glb, const nlohmann::json& json)
   out.append(reinterpret_cast<const char*>(&length), 4);
   out += "JSON" + text + rest;
   return out;
-}
-
-nlohmann::json glbJsonChunk(const std::string& glb) {
-  uint32_t length = 0;
-  std::memcpy(&length, glb.data() + 12, 4);
-  return nlohmann::json::parse(glb.substr(20, length));
 }
 
 void expectRefused(const CliResult& result, const std::string& file, const std::string& output) {
@@ -100,7 +95,7 @@ TEST_CASE("cli: a file that requires an extension rigbake cannot honour is refus
 TEST_CASE("cli: a GLB that requires an unknown extension is refused, naming every one") {
   TempDir dir;
   const std::string glb = slurp(sampleGlbPathForCli());
-  nlohmann::json json = requiring(glbJsonChunk(glb), {"EXT_made_up", "KHR_texture_transform", "EXT_also_made_up"});
+  nlohmann::json json = requiring(glbJson(glb), {"EXT_made_up", "KHR_texture_transform", "EXT_also_made_up"});
   const std::string path = dir / "made_up.glb";
   writeExtensionTestFile(path, glbWithJsonChunk(glb, json));
   CliResult r = runCli("place " + path + " -o " + (dir / "out.json"));
