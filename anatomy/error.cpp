@@ -26,6 +26,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VALIDATE_CONFIG_INVALID", ExitCode::kInvalidInput, "A `rigbake validate --config` file breaks its format; the message gives the JSON pointer."},
       {"RETARGET_LOCATOR_UNANCHORED", ExitCode::kInvalidInput, "A muscle locator rides on a joint with no canonical landmark on it or above it, so it cannot be retargeted."},
       {"RETARGET_SEGMENT_DEGENERATE", ExitCode::kInvalidInput, "Two landmarks that span a retarget frame coincide, so the segment has no direction."},
+      {"GLTF_EXTENSION_UNSUPPORTED", ExitCode::kInvalidInput, "The glTF's extensionsRequired names an extension rigbake cannot honour, so it must not be loaded."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

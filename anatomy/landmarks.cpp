@@ -79,6 +79,8 @@ std::vector<std::string> expandPattern(const std::string& pattern, const NamingM
 struct MapMatch {
   std::map<std::string, int> joints;               // full landmark name -> joint
   std::map<std::string, std::vector<std::string>> tried;  // full landmark name -> names tried
+  // full landmark name -> position of the matching name among those tried (0: the map's first choice)
+  std::map<std::string, int> rank;
 };
 
 MapMatch matchMap(const NamingMap& map, const Character& character) {
@@ -103,7 +105,10 @@ MapMatch matchMap(const NamingMap& map, const Character& character) {
         for (const std::string& name : expandPattern(pattern, map, side.empty() ? "l" : side)) {
           match.tried[full].push_back(name);
           auto it = joint_by_name.find(name);
-          if (it != joint_by_name.end() && !match.joints.count(full)) match.joints[full] = it->second;
+          if (it != joint_by_name.end() && !match.joints.count(full)) {
+            match.joints[full] = it->second;
+            match.rank[full] = static_cast<int>(match.tried[full].size()) - 1;
+          }
         }
       }
     }
@@ -142,6 +147,53 @@ BodyFrame computeBodyFrame(const Character& character, const LandmarkSet& set) {
   body.midline = (left + right) / 2.0;
   body.height = bodyHeight(character, body.up);
   return body;
+}
+
+bool hasDerivation(const LandmarkRules& rules, const std::string& landmark) {
+  return std::any_of(rules.derivations.begin(), rules.derivations.end(),
+                     [&](const LandmarkDerivation& rule) { return rule.landmark == landmark; });
+}
+
+// Two spine landmarks on one joint make a segment of length zero, which no frame built on it survives
+// (retargeting, trapezius drivers). It happens when a map's fallback name is another landmark's first
+// choice: a VRM humanoid without the optional upperChest bone resolves both spine_t12 (chest) and
+// chest (upperChest, else chest) to its Chest bone. Of two such landmarks the one that has a
+// derivation is taken off the joint so that presets/landmarks.json places it between its neighbours;
+// when both have one, the better match keeps the joint (the earlier pattern of the map; on a tie the
+// one higher on the spine). Returns what was taken off, for restoreUnderived.
+std::map<std::string, Landmark> separateCoincidentSpineLandmarks(LandmarkSet* set, const MapMatch& match,
+                                                                 const LandmarkRules& rules) {
+  std::map<std::string, Landmark> taken_off;
+  const std::vector<std::string>& spine = centralLandmarks();  // head first, pelvis last
+  auto rankOf = [&](const std::string& name) {
+    auto it = match.rank.find(name);
+    return it == match.rank.end() || set->landmarks.at(name).source == "structure" ? 0 : it->second;
+  };
+  for (size_t a = 0; a < spine.size(); ++a) {
+    for (size_t b = a + 1; b < spine.size(); ++b) {
+      const Landmark& upper = set->landmarks.at(spine[a]);
+      const Landmark& lower = set->landmarks.at(spine[b]);
+      if (!upper.resolved || !lower.resolved || upper.joint != lower.joint) continue;
+      const bool upper_derivable = hasDerivation(rules, spine[a]);
+      const bool lower_derivable = hasDerivation(rules, spine[b]);
+      std::string off;
+      if (upper_derivable && lower_derivable) off = rankOf(spine[b]) >= rankOf(spine[a]) ? spine[b] : spine[a];
+      else if (upper_derivable) off = spine[a];
+      else if (lower_derivable) off = spine[b];
+      else continue;
+      taken_off[off] = set->landmarks.at(off);
+      set->landmarks[off] = Landmark{};
+    }
+  }
+  return taken_off;
+}
+
+// A landmark taken off a shared joint whose derivation could not run after all goes back on it: a
+// coincident pair is still better than a missing landmark.
+void restoreUnderived(LandmarkSet* set, const std::map<std::string, Landmark>& taken_off) {
+  for (const auto& [name, landmark] : taken_off) {
+    if (!set->has(name)) set->landmarks[name] = landmark;
+  }
 }
 
 void requireLandmarks(const LandmarkSet& set, const std::vector<std::string>& names, const MapMatch* match,
@@ -233,6 +285,7 @@ LandmarkSet resolveLandmarks(const Character& character, const LandmarkInputs& i
     }
     set.map_name = chosen ? chosen->name + "+structure" : "structure";
   }
+  const std::map<std::string, Landmark> taken_off = separateCoincidentSpineLandmarks(&set, match, *inputs.rules);
   const std::string file = character.source;
   const std::string map_name = chosen ? chosen->name : "none";
   requireLandmarks(set, {"pelvis", "chest", "upper_arm_l", "upper_arm_r"}, &match, map_name, file);
@@ -257,6 +310,7 @@ LandmarkSet resolveLandmarks(const Character& character, const LandmarkInputs& i
       set.landmarks[full] = landmark;
     }
   }
+  restoreUnderived(&set, taken_off);
   std::vector<std::string> required;
   for (const std::string& name : allLandmarkNames()) {
     if (!isOptionalLandmark(baseOf(name))) required.push_back(name);

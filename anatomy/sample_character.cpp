@@ -653,7 +653,10 @@ SampleCharacter makeSampleCharacter(const SampleOptions& options) {
   character.vrm = options.vrm;
   character.mesh = buildMesh(skeleton, options.target_vertices);
   character.clips = buildClips(skeleton);
-  for (const auto& [bone, joint] : humanoidMapping()) character.humanoid_bones.emplace_back(bone, skeleton.at(joint));
+  for (const auto& [bone, joint] : humanoidMapping()) {
+    if (!options.upper_chest && std::string(bone) == "upperChest") continue;
+    character.humanoid_bones.emplace_back(bone, skeleton.at(joint));
+  }
 
   // Bind pose: world rotations are identity except the neck's (its +Z to the back). The VRM 0.x
   // variant turns the whole body 180 degrees about Y, which makes every world rotation identity,

@@ -28,6 +28,10 @@ struct SampleOptions {
   // Wanted vertex count; the mesh comes within a few percent of it.
   int target_vertices = 12000;
   SampleVrm vrm = SampleVrm::kNone;
+  // false: the humanoid bone map leaves out upperChest (JOBack3 stays in the skeleton, unmapped), as
+  // many VRM 0.x exports do; both VRM versions make the bone optional. Only the VRM variants write the
+  // map, so only they change.
+  bool upper_chest = true;
 };
 
 inline constexpr int kMinSampleVertices = 2000;
@@ -70,7 +74,8 @@ struct SampleCharacter {
   SampleMesh mesh;
   std::vector<SampleClip> clips;
   SampleVrm vrm = SampleVrm::kNone;
-  // VRM humanoid bone name ("hips", "leftUpperArm", ...) -> joint index; filled for every variant.
+  // VRM humanoid bone name ("hips", "leftUpperArm", ...) -> joint index; filled for every variant
+  // (without "upperChest" when SampleOptions::upper_chest is false).
   std::vector<std::pair<std::string, int>> humanoid_bones;
 
   int findJoint(const std::string& joint_name) const;  // -1 when absent

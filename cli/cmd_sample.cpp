@@ -14,12 +14,14 @@ struct SampleCommandOptions {
   std::string output;
   int vertices = SampleOptions{}.target_vertices;
   int vrm = -1;  // -1: plain glTF, 0: VRM 0.x, 1: VRM 1.0
+  bool no_upper_chest = false;
 };
 
 int runSample(const SampleCommandOptions& options) {
   SampleOptions sample;
   sample.target_vertices = options.vertices;
   sample.vrm = options.vrm == 0 ? SampleVrm::kVrm0 : options.vrm == 1 ? SampleVrm::kVrm1 : SampleVrm::kNone;
+  sample.upper_chest = !options.no_upper_chest;
   SampleCharacter character = makeSampleCharacter(sample);
   writeSampleGltf(character, options.output);
   std::cout << "wrote " << options.output << ": " << character.joints.size() << " joints, "
@@ -58,6 +60,11 @@ void addSampleCommand(CLI::App& app, Runner* runner) {
                    "Joints are then named bone_00, bone_01, ... so that only the extension's humanoid bone map "
                    "says what they are. Use a .vrm output name.")
       ->check(CLI::IsMember({0, 1}));
+  command
+      ->add_flag("--no-upper-chest", options->no_upper_chest,
+                 "With --vrm: leave upperChest out of the humanoid bone map (the joint stays in the skeleton, "
+                 "unmapped), as many VRM 0.x exports do: the map then has spine, chest and neck only")
+      ->needs("--vrm");
   command->callback([runner, options]() { *runner = [options]() { return runSample(*options); }; });
 }
 

@@ -22,7 +22,9 @@ struct LoadedCharacter {
 };
 
 // Reads .glb, .gltf (external or embedded buffers) and .vrm (0.x and 1.0). Throws Error with
-// IO_FILE_NOT_FOUND, GLTF_PARSE_FAILED, GLTF_NO_SKIN, GLTF_SKIN_INVALID or GLTF_ACCESSOR_INVALID.
+// IO_FILE_NOT_FOUND, GLTF_PARSE_FAILED, GLTF_EXTENSION_UNSUPPORTED (extensionsRequired names an
+// extension formats/gltf_extensions.h does not list), GLTF_NO_SKIN, GLTF_SKIN_INVALID or
+// GLTF_ACCESSOR_INVALID.
 LoadedCharacter loadCharacter(const std::string& path);
 
 // Access for formats/ writers only.

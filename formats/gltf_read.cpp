@@ -7,14 +7,18 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cstring>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "anatomy/error.h"
 #include "formats/gltf_json_value.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_accessor.h"
+#include "formats/gltf_decompress.h"
 #include "formats/gltf_document.h"
+#include "formats/gltf_extensions.h"
 
 namespace rigbake {
 
@@ -40,6 +44,25 @@ std::string firstLine(const std::string& text) {
   std::string line = text.substr(0, text.find('\n'));
   while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
   return line.empty() ? "unknown parse error" : line;
+}
+
+// extensionsRequired as the file's JSON says, read without tinygltf: a file that requires an extension
+// tinygltf cannot parse must still be refused for that reason, not as a parse failure.
+std::vector<std::string> requiredExtensionsOf(const std::string& bytes) {
+  std::string text = bytes;
+  if (bytes.size() >= 20 && bytes.compare(0, 4, "glTF") == 0) {
+    uint32_t length = 0;
+    std::memcpy(&length, bytes.data() + 12, sizeof(length));
+    if (bytes.compare(16, 4, "JSON") != 0 || length > bytes.size() - 20) return {};
+    text = bytes.substr(20, length);
+  }
+  const nlohmann::json json = nlohmann::json::parse(text, nullptr, false);
+  std::vector<std::string> required;
+  if (!json.is_object() || !json.contains("extensionsRequired") || !json["extensionsRequired"].is_array()) return {};
+  for (const nlohmann::json& name : json["extensionsRequired"]) {
+    if (name.is_string()) required.push_back(name.get<std::string>());
+  }
+  return required;
 }
 
 std::string directoryOf(const std::string& path) {
@@ -400,6 +423,7 @@ void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint
 
 LoadedCharacter loadCharacter(const std::string& path) {
   std::string bytes = readFile(path);
+  prepareCompressedGltf(&bytes);
   auto document = std::make_shared<GltfDocument>();
   tinygltf::TinyGLTF loader;
   loader.SetImageLoader(keepImageBytes, nullptr);
@@ -416,7 +440,12 @@ LoadedCharacter loadCharacter(const std::string& path) {
     ok = loader.LoadASCIIFromString(&document->model, &err, &warn, bytes.data(),
                                     static_cast<unsigned int>(bytes.size()), directoryOf(path));
   }
-  if (!ok) fail("GLTF_PARSE_FAILED", path, firstLine(err));
+  if (!ok) {
+    requireHonouredExtensions(requiredExtensionsOf(bytes), path);
+    fail("GLTF_PARSE_FAILED", path, firstLine(err));
+  }
+  requireHonouredExtensions(document->model.extensionsRequired, path);
+  decompressGltf(&document->model, path);
   const tinygltf::Model& model = document->model;
   if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
 

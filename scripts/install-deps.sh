@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs everything rigbake needs on Debian: the packages in scripts/deps-apt.txt and the npm tools
-# (Khronos glTF-Validator) under .tools/. Fast when all of it is already there.
+# (Khronos glTF-Validator, glTF-Transform) under .tools/. Fast when all of it is already there.
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -28,3 +28,4 @@ if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
 fi
 
 bash "$repo/scripts/install-validator.sh"
+bash "$repo/scripts/install-gltf-transform.sh"

@@ -4,6 +4,9 @@
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$repo/scripts/install-deps.sh"
+# Every outside program a test starts must run and have what it needs before the build starts: one
+# line naming the missing package beats a test failing ten minutes in.
+bash "$repo/scripts/check-tools.sh"
 
 echo "== release build, all tests" >&2
 bash "$repo/scripts/build.sh" release >/dev/null

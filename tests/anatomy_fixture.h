@@ -54,21 +54,32 @@ inline const MusclePreset& gowPreset() {
 
 namespace rigbake::test {
 
+// A sample variant written once per test process to a temporary file, removed at exit.
+struct SampleFileRemovedAtExit {
+  std::string path;
+  SampleFileRemovedAtExit(SampleVrm variant, bool upper_chest) {
+    const char* suffix = variant == SampleVrm::kNone ? ".glb" : variant == SampleVrm::kVrm0 ? "-vrm0.vrm" : "-vrm1.vrm";
+    path = "/tmp/rigbake-test-sample-" + std::to_string(getpid()) + (upper_chest ? "" : "-no-upper-chest") + suffix;
+    SampleOptions options;
+    options.vrm = variant;
+    options.upper_chest = upper_chest;
+    writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
+  }
+  ~SampleFileRemovedAtExit() { std::remove(path.c_str()); }
+};
+
 // The built-in sample character written once per test process to a temporary GLB.
 inline std::string sampleGlbPath(SampleVrm vrm = SampleVrm::kNone) {
-  struct RemovedAtExit {
-    std::string path;
-    explicit RemovedAtExit(SampleVrm variant) {
-      const char* suffix = variant == SampleVrm::kNone ? ".glb" : variant == SampleVrm::kVrm0 ? "-vrm0.vrm" : "-vrm1.vrm";
-      path = "/tmp/rigbake-test-sample-" + std::to_string(getpid()) + suffix;
-      SampleOptions options;
-      options.vrm = variant;
-      writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
-    }
-    ~RemovedAtExit() { std::remove(path.c_str()); }
-  };
-  static const RemovedAtExit plain(SampleVrm::kNone), vrm0(SampleVrm::kVrm0), vrm1(SampleVrm::kVrm1);
+  static const SampleFileRemovedAtExit plain(SampleVrm::kNone, true), vrm0(SampleVrm::kVrm0, true),
+      vrm1(SampleVrm::kVrm1, true);
   return vrm == SampleVrm::kNone ? plain.path : vrm == SampleVrm::kVrm0 ? vrm0.path : vrm1.path;
+}
+
+// A VRM sample whose humanoid map has spine, chest and neck but no upperChest, as many VRM 0.x
+// exports do (SampleOptions::upper_chest = false).
+inline std::string sampleVrmWithoutUpperChestPath(SampleVrm vrm) {
+  static const SampleFileRemovedAtExit vrm0(SampleVrm::kVrm0, false), vrm1(SampleVrm::kVrm1, false);
+  return vrm == SampleVrm::kVrm1 ? vrm1.path : vrm0.path;
 }
 
 // The sample, then every shared asset (missing ones fail under CI=true, see requireAsset).

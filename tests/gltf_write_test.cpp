@@ -211,16 +211,21 @@ TEST_CASE("the sample GLB, glTF and both VRM variants pass the Khronos glTF-Vali
     SampleVrm vrm;
     const char* file;
     std::set<std::string> warnings;
+    bool upper_chest = true;
   };
   // VRM 0.x's extension is named "VRM", without the vendor prefix glTF extension names have, so the
   // validator warns INVALID_EXTENSION_NAME_FORMAT; VRM 1.0's "VRMC_vrm" is well-formed. Both are
   // unknown to the validator, which only reports that as info (UNSUPPORTED_EXTENSION).
   for (const Variant& variant : {Variant{SampleVrm::kNone, "sample.glb", {}}, Variant{SampleVrm::kNone, "sample.gltf", {}},
                                  Variant{SampleVrm::kVrm0, "sample0.vrm", {"INVALID_EXTENSION_NAME_FORMAT"}},
-                                 Variant{SampleVrm::kVrm1, "sample1.vrm", {}}}) {
+                                 Variant{SampleVrm::kVrm1, "sample1.vrm", {}},
+                                 Variant{SampleVrm::kVrm0, "sample0-no-upper-chest.vrm",
+                                         {"INVALID_EXTENSION_NAME_FORMAT"}, false},
+                                 Variant{SampleVrm::kVrm1, "sample1-no-upper-chest.vrm", {}, false}}) {
     INFO(variant.file);
     SampleOptions options;
     options.vrm = variant.vrm;
+    options.upper_chest = variant.upper_chest;
     std::string path = dir.file(variant.file);
     writeGltf(sampleToGltf(makeSampleCharacter(options)), path);
     ext::ValidationSummary report = ext::validateWithKhronos(path);

@@ -85,6 +85,47 @@ TEST_CASE("the VRM humanoid extension maps joints whose names say nothing") {
   }
 }
 
+TEST_CASE("a VRM humanoid without upperChest keeps chest on its chest bone and derives spine_t12 below it") {
+  for (SampleVrm vrm : {SampleVrm::kVrm0, SampleVrm::kVrm1}) {
+    INFO("vrm variant " << static_cast<int>(vrm));
+    test::Resolved r = test::resolveShipped(test::sampleVrmWithoutUpperChestPath(vrm));
+    CHECK(r.landmarks.map_name == "vrm_humanoid");
+    // The map names the chest bone for both spine_t12 (its first choice) and chest (its fallback for
+    // upperChest); chest has no derivation and keeps the bone, spine_t12 has one and is derived.
+    const Landmark& chest = r.landmarks.get("chest");
+    const Landmark& t12 = r.landmarks.get("spine_t12");
+    const Landmark& l5 = r.landmarks.get("spine_l5");
+    CHECK(chest.source == "vrm");
+    CHECK(chest.from_joint == "bone_02");  // JOBack2, the humanoid "chest"
+    CHECK(t12.source == "derived");
+    CHECK(t12.derived == "lerp(pelvis, chest, 0.6)");
+    CHECK(l5.source == "vrm");
+    const Eigen::Vector3d up = r.landmarks.body.up;
+    CHECK(l5.position.dot(up) < t12.position.dot(up));
+    CHECK(t12.position.dot(up) < chest.position.dot(up));
+  }
+}
+
+TEST_CASE("no two spine landmarks coincide on any character") {
+  std::vector<std::string> paths = test::sampleAndAssetPaths();
+  for (SampleVrm vrm : {SampleVrm::kVrm0, SampleVrm::kVrm1}) {
+    paths.push_back(test::sampleGlbPath(vrm));
+    paths.push_back(test::sampleVrmWithoutUpperChestPath(vrm));
+  }
+  const std::vector<std::string>& spine = centralLandmarks();
+  for (const std::string& path : paths) {
+    INFO(path);
+    test::Resolved r = test::resolveShipped(path);
+    for (size_t a = 0; a < spine.size(); ++a) {
+      for (size_t b = a + 1; b < spine.size(); ++b) {
+        INFO(spine[a] << " and " << spine[b]);
+        const double apart = (r.landmarks.get(spine[a]).position - r.landmarks.get(spine[b]).position).norm();
+        CHECK(apart > 0.01 * r.landmarks.body.height);
+      }
+    }
+  }
+}
+
 TEST_CASE("placed locators sit within 8% of body height of the surface and on their own side") {
   const MusclePreset& preset = test::gowPreset();
   REQUIRE(preset.parts.size() == 14);

@@ -27,10 +27,16 @@ struct Placed {
   MuscleSet muscles;
 };
 
-// The sample and every shared asset present, each resolved and with the preset placed, once.
+// The sample, its VRM variants (with and without upperChest in the humanoid map) and every shared
+// asset present, each resolved and with the preset placed, once.
 const std::vector<Placed>& characters() {
   static const std::vector<Placed> kCharacters = [] {
-    std::vector<std::pair<std::string, std::string>> paths = {{"sample", test::sampleGlbPath()}};
+    std::vector<std::pair<std::string, std::string>> paths = {
+        {"sample", test::sampleGlbPath()},
+        {"sample VRM 0.x", test::sampleGlbPath(SampleVrm::kVrm0)},
+        {"sample VRM 1.0", test::sampleGlbPath(SampleVrm::kVrm1)},
+        {"sample VRM 0.x without upperChest", test::sampleVrmWithoutUpperChestPath(SampleVrm::kVrm0)},
+        {"sample VRM 1.0 without upperChest", test::sampleVrmWithoutUpperChestPath(SampleVrm::kVrm1)}};
     for (const std::string& name : test::sharedAssetNames()) {
       std::string path = test::requireAsset(name);
       if (!path.empty()) paths.emplace_back(name, path);
@@ -331,4 +337,27 @@ TEST_CASE("cli: retarget writes byte-identical JSON and reports each locator's f
   CHECK(found_bicep_origin);
   nlohmann::json written = nlohmann::json::parse(test::slurp(dir / "a.json"));
   CHECK(written["rigbake"]["character"] == "Quaternius_Cyberpunk_Character.glb");
+}
+
+TEST_CASE("cli: a VRM 0.x avatar without upperChest places and retargets both ways") {
+  test::TempDir dir;
+  const std::string sample = test::sampleGlbPathForCli();
+  const std::string avatar = dir / "avatar.vrm";
+  test::CliResult made = test::runCli("sample --vrm 0 --no-upper-chest -o " + avatar);
+  INFO(made.err);
+  REQUIRE(made.exit_code == 0);
+  REQUIRE(test::runCli("place " + sample + " -o " + (dir / "sample_muscles.json")).exit_code == 0);
+  REQUIRE(test::runCli("place " + avatar + " -o " + (dir / "avatar_muscles.json")).exit_code == 0);
+  // Before landmark resolution kept spine_t12 off the chest bone, both failed with
+  // RETARGET_SEGMENT_DEGENERATE: landmarks 'spine_t12' and 'chest' coincide.
+  test::CliResult onto = test::runCli("retarget " + (dir / "sample_muscles.json") + " --from " + sample + " --to " +
+                                      avatar + " -o " + (dir / "onto.json"));
+  INFO(onto.err);
+  CHECK(onto.exit_code == 0);
+  test::CliResult from = test::runCli("retarget " + (dir / "avatar_muscles.json") + " --from " + avatar + " --to " +
+                                      sample + " -o " + (dir / "from.json"));
+  INFO(from.err);
+  CHECK(from.exit_code == 0);
+  // The option only makes sense for a VRM humanoid map.
+  expectFailure(test::runCli("sample --no-upper-chest -o " + (dir / "plain.glb")), "USAGE", 1, dir / "plain.glb");
 }

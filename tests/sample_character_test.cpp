@@ -357,6 +357,44 @@ TEST_CASE("the sample is deterministic and the VRM variants only rename joints")
   }
 }
 
+TEST_CASE("without upperChest the VRM variants leave only that bone out of the humanoid map") {
+  for (SampleVrm vrm : {SampleVrm::kVrm0, SampleVrm::kVrm1}) {
+    INFO((vrm == SampleVrm::kVrm0 ? "VRM 0.x" : "VRM 1.0"));
+    SampleOptions options;
+    options.vrm = vrm;
+    const SampleCharacter full = makeSampleCharacter(options);
+    options.upper_chest = false;
+    const SampleCharacter without = makeSampleCharacter(options);
+    std::vector<std::pair<std::string, int>> expected;
+    for (const auto& bone : full.humanoid_bones) {
+      if (bone.first != "upperChest") expected.push_back(bone);
+    }
+    CHECK(expected.size() + 1 == full.humanoid_bones.size());
+    CHECK(without.humanoid_bones == expected);
+    // The skeleton keeps the joint, unmapped; the body and its clips do not change.
+    REQUIRE(without.joints.size() == full.joints.size());
+    for (size_t j = 0; j < full.joints.size(); ++j) {
+      CHECK(without.joints[j].name == full.joints[j].name);
+      CHECK(without.joints[j].parent == full.joints[j].parent);
+    }
+    CHECK(without.mesh.positions == full.mesh.positions);
+    CHECK(without.mesh.weights == full.mesh.weights);
+    // Loaded back, the file's humanoid map has no upperChest.
+    ext::ScratchDir dir;
+    const std::string path = dir.file("no-upper-chest.vrm");
+    writeGltf(sampleToGltf(without), path);
+    Character c = loadCharacter(path).character;
+    CHECK(c.vrm_humanoid.count("upperChest") == 0);
+    CHECK(c.vrm_humanoid.count("chest") == 1);
+    CHECK(c.vrm_humanoid.size() == expected.size());
+  }
+  // The plain variant writes no humanoid map, so the option leaves its bytes as they are.
+  SampleOptions plain;
+  plain.upper_chest = false;
+  CHECK(serializeGltf(sampleToGltf(makeSampleCharacter(plain)), true) ==
+        serializeGltf(sampleToGltf(defaultSample()), true));
+}
+
 TEST_CASE("the written sample GLB and both VRM variants load back with the same rig") {
   ext::ScratchDir dir;
   REQUIRE(!dir.path().empty());
