@@ -82,30 +82,7 @@ TEST_CASE("every shared character resolves hip, knee and ankle per side; the toe
 
 TEST_CASE("a skeleton without legs still resolves, with its leg landmarks unresolved") {
   test::Resolved full = test::resolveShipped(test::sampleGlbPath());
-  Character legless = full.character;
-  // Cut every leg joint off: rebuild the skeleton without JO*UpLeg1 and below.
-  Skeleton& skeleton = legless.skeleton;
-  std::vector<int> keep;
-  std::vector<int> new_index(skeleton.size(), -1);
-  for (int j = 0; j < skeleton.size(); ++j) {
-    bool under_leg = false;
-    for (int a = j; a >= 0; a = skeleton.parents[a]) under_leg |= skeleton.names[a].find("UpLeg") != std::string::npos;
-    if (under_leg) continue;
-    new_index[j] = static_cast<int>(keep.size());
-    keep.push_back(j);
-  }
-  Skeleton cut;
-  for (int j : keep) {
-    cut.names.push_back(skeleton.names[j]);
-    cut.parents.push_back(skeleton.parents[j] < 0 ? -1 : new_index[skeleton.parents[j]]);
-    cut.nodes.push_back(skeleton.nodes[j]);
-    cut.bind_world.push_back(skeleton.bind_world[j]);
-    cut.rest_local.push_back(skeleton.rest_local[j]);
-    cut.root_parent_world.push_back(skeleton.root_parent_world[j]);
-  }
-  legless.skeleton = cut;
-  legless.meshes.clear();
-  legless.clips.clear();
+  Character legless = test::withoutLegs(full.character);
   test::Resolved r = test::resolveWithShippedPresets(legless);
   CHECK(r.landmarks.map_name == "gow");
   for (const char* name : {"upper_leg_l", "lower_leg_r", "foot_l", "toe_r"}) CHECK_FALSE(r.landmarks.has(name));
