@@ -1,5 +1,6 @@
-// `rigbake rom` from the command line: the ROM file comes out with the character's own clips first,
-// deterministic; bad input is one error line, a documented exit status and no file.
+// `rigbake rom`, and `bake --rom` / `validate --rom` from the command line: the ROM file comes out with
+// the character's own clips first, deterministic; bad input is one error line, a documented exit
+// status and no file; characters without clips get deformation figures through --rom.
 #include <nlohmann/json.hpp>
 
 #include "cli_support.h"
@@ -106,4 +107,94 @@ TEST_CASE("cli rom --help says what the clips are and how to measure on them") {
   for (const char* text : {"range-of-motion", "elbow flexion to 130", "skipped", "--clips", "--preset", "bake --rom",
                            "docs/rom.md", "Example:"})
     CHECK(r.out.find(text) != std::string::npos);
+}
+
+TEST_CASE("cli bake --rom: KayKit and the Soldier, which have no clips, get non-zero deformation figures") {
+  for (const char* name : {"KayKit_Mannequin/manny_med_mod.gltf", "Quaternius_ModularWomen_Soldier.glb"}) {
+    const std::string input = requireAsset(name);
+    if (input.empty()) continue;
+    INFO(name);
+    TempDir dir;
+    CliResult plain = runCli("bake " + input + " --influences 10 -o " + (dir / "plain.glb") + " --stats " + (dir / "plain.json"));
+    REQUIRE(plain.exit_code == 0);
+    CliResult r = runCli("bake " + input + " --influences 10 --rom -o " + (dir / "baked.glb") + " --stats " + (dir / "stats.json"));
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    const nlohmann::json before = nlohmann::json::parse(slurp(dir / "plain.json"));
+    const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "stats.json"));
+    CHECK(before["deformation_error_mm"]["max"] == 0.0);
+    CHECK(stats["clips"] == 10);
+    CHECK(stats["deformation_error_mm"]["max"].get<double>() > 0.0);
+    CHECK(stats["deformation_error_mm"]["rms"].get<double>() > 0.0);
+    for (const char* clip : {"rom_elbow_flexion", "rom_shoulder_abduction", "rom_spine_twist", "rom_knee_flexion"}) {
+      INFO(clip);
+      REQUIRE(stats["deformation_error_mm"]["per_clip"].contains(clip));
+      CHECK(stats["deformation_error_mm"]["per_clip"][clip]["max"].get<double>() > 0.0);
+    }
+    CHECK(stats["deformation_error_mm"]["worst"]["clip"].get<std::string>().rfind("rom_", 0) == 0);
+    CHECK(stats["rom"]["clips"].size() == 10);
+    // Measured on, never written: the baked file has no animation at all, like its input.
+    const nlohmann::json gltf = glbJson(slurp(dir / "baked.glb"));
+    CHECK((!gltf.contains("animations") || gltf["animations"].empty()));
+  }
+}
+
+TEST_CASE("cli validate --rom: the report's per-clip deformation covers the ROM clips of a character without clips") {
+  const std::string input = requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
+  if (input.empty()) return;
+  TempDir dir;
+  REQUIRE(runCli("place " + input + " -o " + (dir / "muscles.json")).exit_code == 0);
+  REQUIRE(runCli("bake " + input + " --muscles " + (dir / "muscles.json") + " --influences 10 --rom=default -o " +
+                 (dir / "baked.glb"))
+              .exit_code == 0);
+  CliResult plain = runCli("validate " + (dir / "baked.glb") + " --muscles " + (dir / "muscles.json") + " --report " + (dir / "plain"));
+  CliResult r = runCli("validate " + (dir / "baked.glb") + " --muscles " + (dir / "muscles.json") + " --report " +
+                       (dir / "rom") + " --rom");
+  INFO(r.err);
+  CHECK(r.exit_code == plain.exit_code);
+  const nlohmann::json before = nlohmann::json::parse(slurp(dir / "plain/report.json"));
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "rom/report.json"));
+  REQUIRE(before["plots"]["packed_deformation"].size() == 1);
+  CHECK(before["plots"]["packed_deformation"][0]["clip"] == "(rest pose)");
+  const nlohmann::json& deformation = report["plots"]["packed_deformation"];
+  REQUIRE(deformation.size() == 10);
+  double largest = 0.0;
+  for (const nlohmann::json& clip : deformation) {
+    CHECK(clip["clip"].get<std::string>().rfind("rom_", 0) == 0);
+    CHECK(clip["samples"] == 61);
+    largest = std::max(largest, clip["max_m"].get<double>());
+  }
+  CHECK(largest > 0.0);
+  CHECK(report["plots"]["muscle_ratio"].size() == 10);
+}
+
+TEST_CASE("cli build: a manifest's \"rom\" measures every character on the ROM clips, and a character can opt out") {
+  const std::string kaykit = requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
+  if (kaykit.empty()) return;
+  TempDir dir;
+  const nlohmann::json manifest = {
+      {"rom", "default"},
+      {"out", "out"},
+      {"characters",
+       {{{"name", "kaykit"}, {"input", kaykit}}, {{"name", "hero"}, {"input", sampleGlbPathForCli()}, {"rom", false}}}}};
+  std::ofstream(dir / "manifest.json") << manifest.dump(2);
+  CliResult r = runCli("build " + (dir / "manifest.json") + " -j 1");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json kaykit_report = nlohmann::json::parse(slurp(dir / "out/kaykit/report.json"));
+  REQUIRE(kaykit_report["plots"]["packed_deformation"].size() == 10);
+  CHECK(kaykit_report["plots"]["packed_deformation"][0]["clip"] == "rom_elbow_flexion");
+  const nlohmann::json baked = glbJson(slurp(dir / "out/kaykit/kaykit.glb"));
+  CHECK((!baked.contains("animations") || baked["animations"].empty()));
+  const nlohmann::json hero_report = nlohmann::json::parse(slurp(dir / "out/hero/report.json"));
+  REQUIRE(hero_report["plots"]["packed_deformation"].size() == 3);
+  CHECK(hero_report["plots"]["packed_deformation"][0]["clip"] == "ElbowFlexion");
+
+  nlohmann::json broken = manifest;
+  broken["characters"][1]["rom"] = "no_such_rom";
+  std::ofstream(dir / "broken.json") << broken.dump(2);
+  CliResult bad = runCli("build " + (dir / "broken.json"));
+  CHECK(bad.exit_code == 3);
+  CHECK(bad.err.rfind("MANIFEST_INVALID ", 0) == 0);
+  CHECK(bad.err.find("#/characters/1/rom") != std::string::npos);
 }
