@@ -50,7 +50,8 @@ int run(const RomCommandOptions& options) {
   }
   std::cerr << "wrote " << options.output << ": " << rom.clips.size() << " ROM clips of " << preset.name << " on "
             << keyed.size() << " joints, after the character's " << character.clips.size() << " own clips\n";
-  for (const RomSkipped& skipped : rom.skipped) std::cerr << "skipped " << skipped.name << ": " << skipped.reason << "\n";
+  for (const RomSkipped& skipped : rom.skipped)
+    std::cerr << "skipped " << skipped.name << ": " << skipped.reason << "\n";
   return 0;
 }
 

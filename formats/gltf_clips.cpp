@@ -30,7 +30,8 @@ const char* pathName(AnimatedPath path) {
 
 }  // namespace
 
-tinygltf::Model modelWithClips(const GltfDocument& document, const Character& character, const std::vector<Clip>& clips) {
+tinygltf::Model modelWithClips(const GltfDocument& document, const Character& character,
+                               const std::vector<Clip>& clips) {
   tinygltf::Model model = modelOf(document);
   GltfBufferAppender data(&model);
   for (const Clip& clip : clips) {

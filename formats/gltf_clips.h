@@ -16,6 +16,7 @@ namespace rigbake {
 // A copy of the document's model with one animation per clip (named clip.name), in order: per track a
 // sampler (its interpolation, float keys; tracks with equal times share one input accessor) and a
 // channel on the joint's node. Write it with writeGltf(). Clips marked measure_only are not written.
-tinygltf::Model modelWithClips(const GltfDocument& document, const Character& character, const std::vector<Clip>& clips);
+tinygltf::Model modelWithClips(const GltfDocument& document, const Character& character,
+                               const std::vector<Clip>& clips);
 
 }  // namespace rigbake

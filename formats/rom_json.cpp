@@ -39,7 +39,8 @@ bool isSidedBase(const std::string& name) {
 // A canonical landmark without a side suffix: a clip names "forearm" and gets both sides.
 std::string romLandmark(const JsonReader& in) {
   const std::string name = in.asString();
-  const bool central = std::find(centralLandmarks().begin(), centralLandmarks().end(), name) != centralLandmarks().end();
+  const bool central =
+      std::find(centralLandmarks().begin(), centralLandmarks().end(), name) != centralLandmarks().end();
   if (!central && !isSidedBase(name)) {
     const std::string where = in.file() + "#" + in.pointer();
     if (isCanonicalLandmark(name))
@@ -170,7 +171,8 @@ RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file) {
       hold.allowKeys({"motion", "deg"});
       RomHold held;
       held.motion = readRomMotion(hold.at("motion"));
-      if (held.motion.kind != RomMotionKind::kBodyAxis) hold.at("motion").fail("a hold turns about a body axis (from, towards)");
+      if (held.motion.kind != RomMotionKind::kBodyAxis)
+        hold.at("motion").fail("a hold turns about a body axis (from, towards)");
       held.deg = numberIn(hold.at("deg"), -360.0, 360.0);
       collectLandmarks(held.motion, &named);
       spec.hold = held;
@@ -202,8 +204,9 @@ RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file) {
     size_t sided = 0;
     for (const std::string& name : named) sided += isSidedBase(name);
     if (sided != 0 && sided != named.size())
-      item.fail("mixes central and sided landmarks in its motion and joints; a clip is either one sweep of the "
-                "trunk or one per side");
+      item.fail(
+          "mixes central and sided landmarks in its motion and joints; a clip is either one sweep of the "
+          "trunk or one per side");
     spec.sided = sided != 0;
     if (!spec.sided && isSidedBase(spec.frame))
       item.at("frame").fail("a central clip's body frame must be a central landmark (one joint carries it)");

@@ -231,7 +231,8 @@ BuiltSweep buildSweep(const RomContext& context, const RomClipSpec& spec, const 
       names = {base + "_l", base + "_r"};
     else names = {base};
     for (const std::string& name : names) {
-      if (landmarks.has(name) && !landmarks.get(name).from_joint.empty()) still_joints.push_back(landmarks.get(name).joint);
+      if (landmarks.has(name) && !landmarks.get(name).from_joint.empty())
+        still_joints.push_back(landmarks.get(name).joint);
     }
   }
   auto movable = [&](int joint) {
@@ -259,7 +260,8 @@ BuiltSweep buildSweep(const RomContext& context, const RomClipSpec& spec, const 
     built.sweep.joints.push_back({joint, name, share.share, false});
   }
   if (built.sweep.joints.empty()) {
-    built.problem = "no joint to key: " + tried + " are not joints of this character (or would move a `still` landmark)";
+    built.problem =
+        "no joint to key: " + tried + " are not joints of this character (or would move a `still` landmark)";
     return built;
   }
   if (spec.follower) {
@@ -268,7 +270,8 @@ BuiltSweep buildSweep(const RomContext& context, const RomClipSpec& spec, const 
       const int joint = landmarks.get(name).joint;
       const bool keyed = std::any_of(built.sweep.joints.begin(), built.sweep.joints.end(),
                                      [&](const RomKeyedJoint& k) { return k.joint == joint; });
-      const MotionAxis follower = motionAxis(context, spec.follower->motion, side, body, Eigen::Quaterniond::Identity());
+      const MotionAxis follower =
+          motionAxis(context, spec.follower->motion, side, body, Eigen::Quaterniond::Identity());
       if (!keyed && movable(joint) && follower.problem.empty()) {
         built.sweep.follower_axis = follower.axis;
         built.sweep.joints.insert(built.sweep.joints.begin(), RomKeyedJoint{joint, name, 0.0, true});
@@ -349,7 +352,8 @@ RomClip buildClip(const RomContext& context, const RomPreset& preset, const RomC
 
 double romAngleAt(const RomClipSpec& spec, double time) {
   const double phase = 2.0 * kRomPi * time / spec.duration_s;
-  if (spec.curve == RomCurve::kRiseAndFall) return spec.from_deg + (spec.to_deg - spec.from_deg) * (0.5 * (1.0 - std::cos(phase)));
+  if (spec.curve == RomCurve::kRiseAndFall)
+    return spec.from_deg + (spec.to_deg - spec.from_deg) * (0.5 * (1.0 - std::cos(phase)));
   const double s = std::sin(phase);
   return s >= 0.0 ? spec.to_deg * s : -spec.from_deg * s;
 }
@@ -395,8 +399,10 @@ RomResult buildRom(const Character& character, const LandmarkSet& landmarks, con
   }
   if (result.clips.empty()) {
     std::string why;
-    for (const RomSkipped& skipped : result.skipped) why += (why.empty() ? "" : "; ") + skipped.name + ": " + skipped.reason;
-    fail("ROM_CLIP_UNAVAILABLE", character.source, "no ROM clip can be built (" + (why.empty() ? "the preset has none" : why) + ")");
+    for (const RomSkipped& skipped : result.skipped)
+      why += (why.empty() ? "" : "; ") + skipped.name + ": " + skipped.reason;
+    fail("ROM_CLIP_UNAVAILABLE", character.source,
+         "no ROM clip can be built (" + (why.empty() ? "the preset has none" : why) + ")");
   }
   return result;
 }

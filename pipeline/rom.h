@@ -32,9 +32,9 @@ enum class RomMotionKind {
 
 struct RomMotion {
   RomMotionKind kind = RomMotionKind::kBodyAxis;
-  std::string from = "down";            // kBodyAxis
-  std::vector<std::string> towards;     // kBodyAxis: one; kHinge: first not along B->C wins
-  std::vector<std::string> landmarks;   // kBodyAxis: optional [A, B] segment; kHinge: [A, B, C]; kTwist: [A, B]
+  std::string from = "down";           // kBodyAxis
+  std::vector<std::string> towards;    // kBodyAxis: one; kHinge: first not along B->C wins
+  std::vector<std::string> landmarks;  // kBodyAxis: optional [A, B] segment; kHinge: [A, B, C]; kTwist: [A, B]
   // Angles count from the rest pose (false), or are the segment's measured angle (true: kBodyAxis with
   // a segment, from `from` towards `towards` seen along the axis; kHinge, the angle between A->B and
   // B->C seen along the axis). Measured angles are absolute: 10 degrees of abduction is the arm 10
@@ -107,9 +107,9 @@ struct RomKeyedJoint {
 
 // One side of a clip (or the only sweep of a central clip) as built on this character.
 struct RomSweep {
-  std::string side;  // "l", "r", or "" for a central clip
+  std::string side;                                 // "l", "r", or "" for a central clip
   Eigen::Vector3d axis = Eigen::Vector3d::UnitX();  // world, unit, in the rest pose
-  double zero_deg = 0.0;  // the measured rest angle (0 for rest-relative motions)
+  double zero_deg = 0.0;                            // the measured rest angle (0 for rest-relative motions)
   Eigen::Vector3d follower_axis = Eigen::Vector3d::UnitX();
   std::vector<RomKeyedJoint> joints;
 };
@@ -122,7 +122,7 @@ struct RomClip {
   // at peak_time, and a swing also reaches `from_deg` at low_time.
   std::vector<double> angle_deg;
   double peak_time = 0.0;
-  double low_time = -1.0;  // kSwing only
+  double low_time = -1.0;             // kSwing only
   const RomClipSpec* spec = nullptr;  // into the preset given to buildRom
 };
 

@@ -50,7 +50,8 @@ TEST_CASE("cli rom: the mannequin gets ten rom_* animations after its own three,
   CHECK(gltf["animations"][3]["name"] == "rom_elbow_flexion");
   CHECK(gltf["animations"][12]["name"] == "rom_hip_abduction");
   for (const nlohmann::json& sampler : gltf["animations"][3]["samplers"]) CHECK(sampler["interpolation"] == "LINEAR");
-  for (const nlohmann::json& channel : gltf["animations"][3]["channels"]) CHECK(channel["target"]["path"] == "rotation");
+  for (const nlohmann::json& channel : gltf["animations"][3]["channels"])
+    CHECK(channel["target"]["path"] == "rotation");
 }
 
 TEST_CASE("cli rom: --clips picks clips, and two runs write the same bytes") {
@@ -74,7 +75,8 @@ TEST_CASE("cli rom: bad input is one error line with its code, a non-zero exit a
     int exit;
   };
   std::ofstream(dir / "not.glb") << "this is not glTF";
-  std::ofstream(dir / "typo.json") << R"({"clips": [{"name": "x", "from_deg": 0, "to_deg": 10, "motion": {"from": "down", "towards": "lateral"}, "joints": [{"landmark": "upper_arm"}], "durration_s": 2}]})";
+  std::ofstream(dir / "typo.json")
+      << R"({"clips": [{"name": "x", "from_deg": 0, "to_deg": 10, "motion": {"from": "down", "towards": "lateral"}, "joints": [{"landmark": "upper_arm"}], "durration_s": 2}]})";
   REQUIRE(runCli("rom " + sampleGlbPathForCli() + " -o " + (dir / "once.glb")).exit_code == 0);
   const std::vector<Case> cases = {
       {"rom " + sampleGlbPathForCli() + " --clips wrist_flexion" + out, "ROM_CLIP_UNKNOWN", 3},
@@ -115,9 +117,11 @@ TEST_CASE("cli bake --rom: KayKit and the Soldier, which have no clips, get non-
     if (input.empty()) continue;
     INFO(name);
     TempDir dir;
-    CliResult plain = runCli("bake " + input + " --influences 10 -o " + (dir / "plain.glb") + " --stats " + (dir / "plain.json"));
+    CliResult plain =
+        runCli("bake " + input + " --influences 10 -o " + (dir / "plain.glb") + " --stats " + (dir / "plain.json"));
     REQUIRE(plain.exit_code == 0);
-    CliResult r = runCli("bake " + input + " --influences 10 --rom -o " + (dir / "baked.glb") + " --stats " + (dir / "stats.json"));
+    CliResult r = runCli("bake " + input + " --influences 10 --rom -o " + (dir / "baked.glb") + " --stats " +
+                         (dir / "stats.json"));
     INFO(r.err);
     REQUIRE(r.exit_code == 0);
     const nlohmann::json before = nlohmann::json::parse(slurp(dir / "plain.json"));
@@ -147,7 +151,8 @@ TEST_CASE("cli validate --rom: the report's per-clip deformation covers the ROM 
   REQUIRE(runCli("bake " + input + " --muscles " + (dir / "muscles.json") + " --influences 10 --rom=default -o " +
                  (dir / "baked.glb"))
               .exit_code == 0);
-  CliResult plain = runCli("validate " + (dir / "baked.glb") + " --muscles " + (dir / "muscles.json") + " --report " + (dir / "plain"));
+  CliResult plain = runCli("validate " + (dir / "baked.glb") + " --muscles " + (dir / "muscles.json") + " --report " +
+                           (dir / "plain"));
   CliResult r = runCli("validate " + (dir / "baked.glb") + " --muscles " + (dir / "muscles.json") + " --report " +
                        (dir / "rom") + " --rom");
   INFO(r.err);
@@ -172,11 +177,11 @@ TEST_CASE("cli build: a manifest's \"rom\" measures every character on the ROM c
   const std::string kaykit = requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
   if (kaykit.empty()) return;
   TempDir dir;
-  const nlohmann::json manifest = {
-      {"rom", "default"},
-      {"out", "out"},
-      {"characters",
-       {{{"name", "kaykit"}, {"input", kaykit}}, {{"name", "hero"}, {"input", sampleGlbPathForCli()}, {"rom", false}}}}};
+  const nlohmann::json manifest = {{"rom", "default"},
+                                   {"out", "out"},
+                                   {"characters",
+                                    {{{"name", "kaykit"}, {"input", kaykit}},
+                                     {{"name", "hero"}, {"input", sampleGlbPathForCli()}, {"rom", false}}}}};
   std::ofstream(dir / "manifest.json") << manifest.dump(2);
   CliResult r = runCli("build " + (dir / "manifest.json") + " -j 1");
   INFO(r.err);

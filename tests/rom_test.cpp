@@ -1,5 +1,7 @@
 // Range-of-motion clips (pipeline/rom.h): they reproduce the mannequin's own clips, they validate, and
 // read back from the written file every clip's joints turn by the stated angle about the stated axis.
+#include "pipeline/rom.h"
+
 #include <tiny_gltf.h>
 
 #include <cmath>
@@ -17,7 +19,6 @@
 #include "glb_support.h"
 #include "pipeline/bake.h"
 #include "pipeline/pose.h"
-#include "pipeline/rom.h"
 
 using namespace rigbake;
 
@@ -44,8 +45,8 @@ const Clip* romClipNamed(const Character& character, const std::string& name) {
 
 struct WrittenRom {
   std::string path;
-  RomResult rom;        // as built on the input
-  Character original;   // the input as loaded
+  RomResult rom;       // as built on the input
+  Character original;  // the input as loaded
 };
 
 // Builds the default ROM on `input` and writes it the way `rigbake rom` does.
@@ -64,8 +65,8 @@ WrittenRom writeRom(const std::string& input, const std::string& output) {
 
 // The body frame as the joint of landmark `frame` carries it from bind to rest, recomputed here from
 // the file's own landmarks, and a named body direction in it.
-Eigen::Vector3d bodyDirection(const test::Resolved& r, const Pose& rest, const std::string& frame, const std::string& name,
-                              const std::string& side) {
+Eigen::Vector3d bodyDirection(const test::Resolved& r, const Pose& rest, const std::string& frame,
+                              const std::string& name, const std::string& side) {
   const int joint = r.landmarks.get(frame).joint;
   const Eigen::Quaterniond carry =
       rotationOfWorld(rest.world[joint]) * rotationOfWorld(r.character.skeleton.bind_world[joint]).conjugate();
@@ -81,7 +82,9 @@ Eigen::Vector3d bodyDirection(const test::Resolved& r, const Pose& rest, const s
   return carry * v;
 }
 
-std::string sidedFor(const std::string& base, const std::string& side) { return side.empty() ? base : sidedName(base, side); }
+std::string sidedFor(const std::string& base, const std::string& side) {
+  return side.empty() ? base : sidedName(base, side);
+}
 
 // Bone direction from landmark a towards landmark b in `pose`: b's bind offset carried by a's joint.
 Eigen::Vector3d segmentIn(const test::Resolved& r, const Pose& pose, const std::string& a, const std::string& b) {
@@ -136,9 +139,9 @@ void checkWrittenPeaks(const WrittenRom& written) {
                    .cross(bodyDirection(back, rest, sidedFor(spec.frame, sweep.side), motion.towards.front(), dir_side))
                    .normalized();
       } else if (motion.kind == RomMotionKind::kTwist) {
-        axis = (sweep.side == "r" ? -1.0 : 1.0) *
-               segmentIn(back, rest, sidedFor(motion.landmarks[0], sweep.side), sidedFor(motion.landmarks[1], sweep.side))
-                   .normalized();
+        axis = (sweep.side == "r" ? -1.0 : 1.0) * segmentIn(back, rest, sidedFor(motion.landmarks[0], sweep.side),
+                                                            sidedFor(motion.landmarks[1], sweep.side))
+                                                      .normalized();
       } else {
         // A hinge's axis is square to the bending bone at rest.
         const Eigen::Vector3d lower =
@@ -146,7 +149,8 @@ void checkWrittenPeaks(const WrittenRom& written) {
         CHECK(std::abs(axis.dot(lower.normalized())) < 1e-6);
       }
       CHECK(std::acos(std::min(1.0, axis.dot(sweep.axis))) / kTestDegree < 0.01);
-      if (motion.measured) CHECK(std::abs(measuredAngle(back, start, rest, spec, sweep.side, axis) - start_angle) < 0.1);
+      if (motion.measured)
+        CHECK(std::abs(measuredAngle(back, start, rest, spec, sweep.side, axis) - start_angle) < 0.1);
       for (const auto& [time, angle] : peaks) {
         INFO("at " << time << " s, " << angle << " degrees");
         const Pose peak = sampleClip(skeleton, *read, time);
@@ -162,8 +166,8 @@ void checkWrittenPeaks(const WrittenRom& written) {
         // A hinge that rests straight bends towards its first `towards` direction: the forearm to the
         // front of the body, the shin to the back.
         if (motion.kind == RomMotionKind::kHinge && std::abs(sweep.zero_deg) < 10.0) {
-          const Eigen::Vector3d lower =
-              segmentIn(back, peak, sidedFor(motion.landmarks[1], sweep.side), sidedFor(motion.landmarks[2], sweep.side));
+          const Eigen::Vector3d lower = segmentIn(back, peak, sidedFor(motion.landmarks[1], sweep.side),
+                                                  sidedFor(motion.landmarks[2], sweep.side));
           const Eigen::Vector3d towards = bodyDirection(back, rest, spec.frame, motion.towards.front(), dir_side);
           CHECK(lower.normalized().dot(towards) > 0.5);
         }
@@ -232,7 +236,8 @@ TEST_CASE("the mannequin's ROM reproduces its built-in ElbowFlexion, ArmRaise an
   for (SampleVrm variant : {SampleVrm::kNone, SampleVrm::kVrm0, SampleVrm::kVrm1}) {
     const test::Resolved r = test::resolveShipped(test::sampleGlbPath(variant));
     INFO("variant " << static_cast<int>(variant) << " map " << r.landmarks.map_name);
-    const RomResult rom = buildRom(r.character, r.landmarks, defaultRom(), {"elbow_flexion", "shoulder_abduction", "forearm_twist"});
+    const RomResult rom =
+        buildRom(r.character, r.landmarks, defaultRom(), {"elbow_flexion", "shoulder_abduction", "forearm_twist"});
     REQUIRE(rom.clips.size() == 3);
     // The built-in clips as the character itself holds them in memory (doubles), and as the file stores
     // them (floats): joint order is the sample's, so match tracks by joint name.
@@ -258,7 +263,8 @@ TEST_CASE("the mannequin's ROM reproduces its built-in ElbowFlexion, ArmRaise an
         const Track* file_track = nullptr;
         for (const Track& t : stored->tracks) file_track = t.joint == track.joint ? &t : file_track;
         const SampleTrack* sample_track = nullptr;
-        for (const SampleTrack& t : built_in->tracks) sample_track = sample.joints[t.joint].name == joint ? &t : sample_track;
+        for (const SampleTrack& t : built_in->tracks)
+          sample_track = sample.joints[t.joint].name == joint ? &t : sample_track;
         REQUIRE(file_track);
         REQUIRE(sample_track);
         REQUIRE(track.times.size() == file_track->times.size());
@@ -310,7 +316,8 @@ TEST_CASE("the ROM of the mannequin and of every shared character validates and 
   }
 }
 
-TEST_CASE("at every ROM clip's peak, read back from the written file, each keyed joint has turned by the stated angle") {
+TEST_CASE(
+    "at every ROM clip's peak, read back from the written file, each keyed joint has turned by the stated angle") {
   test::external::ScratchDir scratch;
   std::vector<std::string> inputs = test::sampleAndAssetPaths();
   for (SampleVrm vrm : {SampleVrm::kVrm0, SampleVrm::kVrm1}) inputs.push_back(test::sampleGlbPath(vrm));
