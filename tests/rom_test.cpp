@@ -286,7 +286,7 @@ TEST_CASE("the mannequin's ROM reproduces its built-in ElbowFlexion, ArmRaise an
   }
 }
 
-TEST_CASE("the ROM of the mannequin and of every shared character validates and keeps the character's own clips") {
+TEST_CASE("the ROM of the mannequin and every shared character passes the Khronos validator, own clips kept") {
   if (!test::external::requireTool(test::external::validatorAvailable(), test::external::validatorHint())) return;
   test::external::ScratchDir scratch;
   std::vector<std::string> inputs = test::sampleAndAssetPaths();
