@@ -76,9 +76,12 @@ struct Track {
 
 struct Clip {
   std::string name;
-  int gltf_animation = -1;
+  int gltf_animation = -1;  // -1 for a clip that is not in the file
   double duration = 0.0;
   std::vector<Track> tracks;
+  // Added in memory to be measured on, never written: the range-of-motion clips of `bake --rom` and
+  // `validate --rom` (pipeline/rom.h). Stages that measure treat it as any clip; writers skip it.
+  bool measure_only = false;
 };
 
 struct Character {

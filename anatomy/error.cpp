@@ -27,6 +27,9 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"RETARGET_LOCATOR_UNANCHORED", ExitCode::kInvalidInput, "A muscle locator rides on a joint with no canonical landmark on it or above it, so it cannot be retargeted."},
       {"RETARGET_SEGMENT_DEGENERATE", ExitCode::kInvalidInput, "Two landmarks that span a retarget frame coincide, so the segment has no direction."},
       {"GLTF_EXTENSION_UNSUPPORTED", ExitCode::kInvalidInput, "The glTF's extensionsRequired names an extension rigbake cannot honour, so it must not be loaded."},
+      {"ROM_CLIP_UNKNOWN", ExitCode::kInvalidInput, "--clips names a clip the ROM preset does not have."},
+      {"ROM_CLIP_UNAVAILABLE", ExitCode::kInvalidInput, "A ROM clip needs a landmark or joint the character lacks (no legs, no neck joint), or no ROM clip fits it at all."},
+      {"ROM_CLIP_EXISTS", ExitCode::kInvalidInput, "The character already has an animation with a ROM clip's name (it is a ROM output already)."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

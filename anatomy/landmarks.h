@@ -1,6 +1,7 @@
 // Canonical skeleton landmarks (the talk's "Spinal Column" mapping: head C1, neck C7, chest T8,
 // spine_t12 T12, spine_l5 L5, pelvis S5; and per side clavicle, acromion, scapula, upper arm, twist
-// joints, forearm, hand) resolved from any naming convention, from structure, or derived.
+// joints, forearm, hand, and the optional legs: upper leg, lower leg, foot, toe) resolved from any
+// naming convention, from structure, or derived.
 #pragma once
 
 #include <Eigen/Core>

@@ -11,13 +11,20 @@ const std::vector<std::string>& centralLandmarks() {
 }
 
 const std::vector<std::string>& sidedLandmarks() {
-  static const std::vector<std::string> kNames = {"clavicle", "acromion",     "scapula",       "upper_arm",
-                                                  "upper_arm_twist", "forearm", "forearm_twist", "hand"};
+  static const std::vector<std::string> kNames = {"clavicle",  "acromion",      "scapula", "upper_arm", "upper_arm_twist",
+                                                  "forearm",   "forearm_twist", "hand",    "upper_leg", "lower_leg",
+                                                  "foot",      "toe"};
   return kNames;
 }
 
 bool isOptionalLandmark(const std::string& base_name) {
-  return base_name == "upper_arm_twist" || base_name == "forearm_twist";
+  // Twist joints are a rig's choice; legs are optional so that a bust or a legless character still
+  // resolves (the muscle presets and everything before the ROM clips use the arms and trunk only).
+  return base_name == "upper_arm_twist" || base_name == "forearm_twist" || isLegLandmark(base_name);
+}
+
+bool isLegLandmark(const std::string& base_name) {
+  return base_name == "upper_leg" || base_name == "lower_leg" || base_name == "foot" || base_name == "toe";
 }
 
 std::string sidedName(const std::string& name, const std::string& side) {

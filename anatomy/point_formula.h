@@ -37,8 +37,9 @@ struct PointFormula {
 
 // Landmark names every skeleton is resolved to (docs/output-contract.md).
 const std::vector<std::string>& centralLandmarks();  // head, neck, chest, spine_t12, spine_l5, pelvis
-const std::vector<std::string>& sidedLandmarks();    // clavicle, acromion, ... without the _l/_r suffix
-bool isOptionalLandmark(const std::string& base_name);  // the twist joints
+const std::vector<std::string>& sidedLandmarks();    // clavicle, acromion, ..., upper_leg, ... without _l/_r
+bool isOptionalLandmark(const std::string& base_name);  // the twist joints and the legs
+bool isLegLandmark(const std::string& base_name);       // upper_leg, lower_leg, foot, toe
 // "clavicle" + side "l" -> "clavicle_l"; central names and names already suffixed are unchanged.
 std::string sidedName(const std::string& name, const std::string& side);
 bool isCanonicalLandmark(const std::string& name);  // accepts both "clavicle" and "clavicle_l"

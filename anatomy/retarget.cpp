@@ -72,6 +72,10 @@ SegmentFrame frameOf(const std::string& landmark) {
       {"forearm", {"forearm", "forearm", "hand"}},
       {"forearm_twist", {"forearm", "forearm", "hand"}},
       {"hand", {"hand", "forearm", "hand"}},
+      {"upper_leg", {"upper_leg", "upper_leg", "lower_leg"}},
+      {"lower_leg", {"lower_leg", "lower_leg", "foot"}},
+      {"foot", {"foot", "lower_leg", "foot"}},
+      {"toe", {"toe", "foot", "toe"}},
   };
   const std::string side = sideSuffixOf(landmark);
   auto it = kFrames.find(baseNameOf(landmark));
@@ -139,13 +143,15 @@ const std::vector<std::string>* attachCandidates(const PresetPart* spec, const s
 }
 
 // Among the landmarks riding on `joint`, the one that is the joint itself, else the nearest to the
-// locator, else by name; empty when none rides on it.
+// locator, else by name; empty when none rides on it. Leg landmarks are not anchors (yet): they are
+// optional, so a destination may have no leg frame, and a locator on a leg keeps riding the pelvis
+// as it did before legs were landmarks.
 std::string landmarkOnJoint(int joint, const Eigen::Vector3d& world, const Skeleton& skeleton,
                             const LandmarkSet& landmarks) {
   std::string best;
   std::tuple<int, double> best_rank{std::numeric_limits<int>::max(), 0.0};
   for (const auto& [name, landmark] : landmarks.landmarks) {  // std::map: name order breaks ties
-    if (!landmark.resolved || landmark.joint != joint) continue;
+    if (!landmark.resolved || landmark.joint != joint || isLegLandmark(baseNameOf(name))) continue;
     std::tuple<int, double> rank{landmark.from_joint == skeleton.names[joint] ? 0 : 1,
                                  (landmark.position - world).norm()};
     if (best.empty() || rank < best_rank) {

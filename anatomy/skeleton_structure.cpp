@@ -1,7 +1,8 @@
 // Structural landmark finder. A humanoid hierarchy has one joint where the legs and the spine part
 // (the pelvis) and one where the neck and both arms part (the chest); the chain between them is the
 // lumbar/thoracic spine, the middle branch of the chest is the neck and head, the two outer branches
-// are the arms. A short first arm segment before two long ones is a clavicle.
+// are the arms. A short first arm segment before two long ones is a clavicle. The pelvis' other
+// branches that reach down are the legs: hip, knee, ankle, toe.
 #include "anatomy/skeleton_structure.h"
 
 #include <algorithm>
@@ -73,6 +74,53 @@ std::vector<std::string> nameTokens(const std::string& name) {
   }
   flush();
   return tokens;
+}
+
+// The legs: of the pelvis' other branches, the two whose chains reach lowest below the pelvis (a tail
+// or an IK helper does not), each at least hip, knee and ankle. A first segment shorter than half the
+// next is a hip offset joint, not the femur. Sides come from the names, else from which side of the
+// shoulders' midline the leg starts. Nothing is added unless both legs are found.
+void addLegsFromStructure(const Skeleton& skeleton, const Tree& tree, int pelvis, int spine_start,
+                          std::map<std::string, int>* found) {
+  if (!found->count("upper_arm_l") || !found->count("upper_arm_r") || !found->count("chest")) return;
+  const Eigen::Vector3d pelvis_position = skeleton.bindPosition(pelvis);
+  const Eigen::Vector3d up = (skeleton.bindPosition(found->at("chest")) - pelvis_position).normalized();
+  struct LegChain {
+    std::vector<int> joints;
+    double depth = 0.0;  // how far below the pelvis the chain's tip reaches
+  };
+  std::vector<LegChain> legs;
+  for (int branch : branches(tree, pelvis)) {
+    if (branch == spine_start) continue;
+    LegChain leg;
+    for (int j = branch; j >= 0; j = largestChild(tree, j)) leg.joints.push_back(j);
+    leg.depth = (pelvis_position - skeleton.bindPosition(leg.joints.back())).dot(up);
+    if (leg.joints.size() >= 3 && leg.depth > 0.0) legs.push_back(std::move(leg));
+  }
+  if (legs.size() < 2) return;
+  std::stable_sort(legs.begin(), legs.end(), [](const LegChain& a, const LegChain& b) { return a.depth > b.depth; });
+  legs.resize(2);
+  auto length = [&](int a, int b) { return (skeleton.bindPosition(a) - skeleton.bindPosition(b)).norm(); };
+  const Eigen::Vector3d left = skeleton.bindPosition(found->at("upper_arm_l")) - skeleton.bindPosition(found->at("upper_arm_r"));
+  const Eigen::Vector3d midline = (skeleton.bindPosition(found->at("upper_arm_l")) + skeleton.bindPosition(found->at("upper_arm_r"))) / 2.0;
+  std::string sides[2];
+  for (int k = 0; k < 2; ++k) sides[k] = sideFromName(skeleton.names[legs[k].joints.front()]);
+  if (sides[0].empty() || sides[1].empty() || sides[0] == sides[1]) {
+    const bool first_is_left = (skeleton.bindPosition(legs[0].joints.front()) - midline).dot(left) >
+                               (skeleton.bindPosition(legs[1].joints.front()) - midline).dot(left);
+    sides[0] = first_is_left ? "l" : "r";
+    sides[1] = first_is_left ? "r" : "l";
+  }
+  for (int k = 0; k < 2; ++k) {
+    const std::vector<int>& chain = legs[k].joints;
+    size_t first = 0;
+    if (chain.size() >= 4 && length(chain[0], chain[1]) < 0.5 * length(chain[1], chain[2])) first = 1;
+    if (chain.size() < first + 3) continue;
+    (*found)["upper_leg_" + sides[k]] = chain[first];
+    (*found)["lower_leg_" + sides[k]] = chain[first + 1];
+    (*found)["foot_" + sides[k]] = chain[first + 2];
+    if (chain.size() >= first + 4) (*found)["toe_" + sides[k]] = chain[first + 3];
+  }
 }
 
 }  // namespace
@@ -170,6 +218,7 @@ std::map<std::string, int> landmarksFromStructure(const Skeleton& skeleton) {
       found["hand_" + side] = chain[first_arm + 2];
     }
   }
+  addLegsFromStructure(skeleton, tree, pelvis, spine_start, &found);
   return found;
 }
 

@@ -16,7 +16,9 @@
 #include "formats/gltf_write.h"
 #include "formats/muscle_json.h"
 #include "formats/preset_json.h"
+#include "formats/rom_json.h"
 #include "pipeline/bake.h"
+#include "pipeline/rom.h"
 
 namespace rigbake::cli {
 
@@ -67,6 +69,7 @@ Loaded loadResolved(const std::string& path, const SharedPresets& presets) {
 std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& character) {
   std::vector<std::string> files = {character.input, character.preset};
   if (!character.muscles.empty()) files.push_back(character.muscles);
+  if (!character.rom.empty()) files.push_back(character.rom);
   if (!character.muscles_from.empty()) {
     const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
     files.push_back(source.input);
@@ -74,7 +77,8 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
   }
   return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
                                 std::to_string(character.influences) + " gltf_weights " +
-                                gltfWeightsName(character.gltf_weights) + " muscles_from " + character.muscles_from);
+                                gltfWeightsName(character.gltf_weights) + " muscles_from " + character.muscles_from +
+                                (character.rom.empty() ? std::string() : " rom"));
 }
 
 // Validates the written model against its muscle file and writes the three reports; returns how many
@@ -85,6 +89,7 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
   request.muscles = out.muscles;
   request.preset = character.preset;
   request.presets.presets_dir = presets.directory;
+  request.rom = character.rom;
   const Report report = validateBakedFile(request);
   writeReports(report, {out.report_json, out.report_junit, out.report_html});
   int failed = 0;
@@ -167,6 +172,9 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
       muscles = placeMuscles(body, loaded.landmarks, preset, Sides::kBoth);
     }
     muscles.character = character.name + ".glb";
+    // "rom": measured on, not written (docs/rom.md).
+    if (!character.rom.empty())
+      appendMeasureOnlyClips(&loaded.character.character, buildRom(body, loaded.landmarks, readRomPreset(character.rom)));
     BakeOptions options;
     options.influences = character.influences;
     options.gltf_weights = character.gltf_weights;

@@ -20,6 +20,7 @@
 #include "formats/vrm_spring.h"
 #include "pipeline/bake.h"
 #include "pipeline/memory_table.h"
+#include "pipeline/rom.h"
 
 namespace rigbake::cli {
 namespace {
@@ -33,6 +34,7 @@ struct BakeCommandOptions {
   std::string stats_output;
   std::string jiggle;
   std::string hits;
+  std::string rom;  // ROM preset to measure on (--rom), empty: none
   bool springs_only = false;
   int influences = 4;
   std::string gltf_weights = "milli";
@@ -127,6 +129,15 @@ void addSpringBones(tinygltf::Model* model, const Character& character, const Ba
 int run(const BakeCommandOptions& options) {
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
+  // --rom: the range-of-motion clips join the character's own in memory only, so the weight rounding and
+  // the deformation figures see them, but the written file does not hold them (docs/rom.md).
+  RomPreset rom_preset;  // outlives `rom`, whose clips point at their specs in it
+  RomResult rom;
+  if (!options.rom.empty()) {
+    rom_preset = loadRomPreset(options.presets, options.rom);
+    rom = buildRom(resolved.loaded.character, resolved.landmarks, rom_preset);
+    appendMeasureOnlyClips(&resolved.loaded.character, rom);
+  }
   const Character& character = resolved.loaded.character;
   MuscleSet muscles = options.muscles.empty()
                           ? placeMuscles(character, resolved.landmarks, preset, Sides::kBoth)
@@ -150,6 +161,7 @@ int run(const BakeCommandOptions& options) {
   if (options.springs_only) baked_motion.jiggles.clear();
   BakeResult bake = bakeCharacter(character, muscles, baked_motion);
   nlohmann::json stats = statsJson(options, character, muscles, bake);
+  if (!options.rom.empty()) stats["rom"] = romJson(rom, character.skeleton);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
   tinygltf::Model model = bakedModel(*resolved.loaded.document, character, bake);
@@ -252,6 +264,13 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "limits simulated on a fixed 240 Hz step and baked into every clip; on a VRM also exported as "
                       "spring bones (docs/jiggle.md)");
   command->add_option("--hits", options->hits, "Hit reactions (JSON, docs/jiggle.md) that kick the jiggle joints");
+  command->add_option("--rom", options->rom,
+                      "Also measure on range-of-motion clips (a ROM preset; alone: default), so that characters without "
+                      "clips get deformation figures: the clips take part in the weight rounding and the error figures "
+                      "(per_clip rom_*) but are not written into the output (`rigbake rom` writes them; docs/rom.md). "
+                      "Put it after the character, or write --rom=PRESET")
+      ->expected(0, 1)
+      ->default_str("default");
   command->add_flag("--vrm-springs-only", options->springs_only,
                     "VRM only: export the --jiggle joints as spring bones for the runtime to simulate, and do not "
                     "also bake them into the clips");

@@ -79,8 +79,9 @@ void addLandmarksCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand(
       "landmarks",
       "Resolve and print the canonical skeleton landmarks (head, neck, chest, spine_t12, spine_l5, pelvis; per side "
-      "clavicle, acromion, scapula, upper_arm(_twist), forearm(_twist), hand) with the joint each came from or the "
-      "formula that derived it. Positions are world space at bind pose, in metres.");
+      "clavicle, acromion, scapula, upper_arm(_twist), forearm(_twist), hand, and the optional upper_leg, lower_leg, "
+      "foot, toe) with the joint each came from or the formula that derived it. Positions are world space at bind "
+      "pose, in metres.");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print machine-readable JSON (docs/output-contract.md)");

@@ -21,6 +21,7 @@ struct ValidateCommandOptions {
   std::string preset = "gow_biped";
   std::string config;
   std::string report_dir;
+  std::string rom;
   bool khronos = false;
   bool json = false;
   PresetOptions presets;
@@ -34,6 +35,7 @@ int run(const ValidateCommandOptions& options) {
   request.presets = options.presets;
   if (!options.config.empty()) request.config = readValidationConfig(options.config);
   request.khronos = options.khronos;
+  request.rom = options.rom;
   const Report report = validateBakedFile(request);
   writeReports(report, reportPathsIn(options.report_dir));
   const std::string character_name = fileNameOf(options.baked);
@@ -74,6 +76,13 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
                       "JSON file overriding check thresholds and severities (docs/validate.md)");
   command->add_flag("--khronos", options->khronos,
                     "Also run the Khronos glTF-Validator (needs node and scripts/install-validator.sh)");
+  command->add_option("--rom", options->rom,
+                      "Also measure on range-of-motion clips (a ROM preset; alone: default): the muscle ratios and the "
+                      "deformation figures per clip cover the rom_* clips too, so a character without clips gets "
+                      "figures (docs/rom.md). The muscle joints ride their attach joints rigidly in these clips. Put it "
+                      "after the file, or write --rom=PRESET")
+      ->expected(0, 1)
+      ->default_str("default");
   command->add_flag("--json", options->json, "Also print report.json on stdout");
   addPresetOptions(command, &options->presets);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

@@ -18,5 +18,6 @@ void addErrorsCommand(CLI::App& app, Runner* runner);
 void addValidateCommand(CLI::App& app, Runner* runner);
 void addRetargetCommand(CLI::App& app, Runner* runner);
 void addBuildCommand(CLI::App& app, Runner* runner);
+void addRomCommand(CLI::App& app, Runner* runner);
 
 }  // namespace rigbake::cli

@@ -1,10 +1,12 @@
 #include "cli/common.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 
 #include "anatomy/error.h"
 #include "formats/preset_json.h"
+#include "formats/rom_json.h"
 
 namespace rigbake::cli {
 
@@ -37,6 +39,60 @@ std::string presetFile(const PresetOptions& options, const std::string& kind, co
 
 MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path) {
   return readMusclePreset(presetFile(options, "muscles", name_or_path));
+}
+
+RomPreset loadRomPreset(const PresetOptions& options, const std::string& name_or_path) {
+  return readRomPreset(presetFile(options, "rom", name_or_path));
+}
+
+std::vector<std::string> splitClipNames(const std::string& list, const std::string& option) {
+  std::vector<std::string> names;
+  if (list.empty()) return names;
+  const std::string text = list + ",";
+  for (size_t start = 0, comma; (comma = text.find(',', start)) != std::string::npos; start = comma + 1) {
+    const std::string name = text.substr(start, comma - start);
+    if (name.empty()) fail("USAGE", option, "has an empty clip name in '" + list + "'");
+    names.push_back(name);
+  }
+  return names;
+}
+
+namespace {
+// Six decimals: the axes are for reading, and the file's floats hold about seven digits anyway.
+double rounded(double value) { return std::round(value * 1e6) / 1e6 + 0.0; }
+}  // namespace
+
+nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton) {
+  nlohmann::json clips = nlohmann::json::array();
+  for (const RomClip& clip : rom.clips) {
+    nlohmann::json sides = nlohmann::json::array();
+    for (const RomSweep& sweep : clip.sweeps) {
+      nlohmann::json joints = nlohmann::json::array();
+      for (const RomKeyedJoint& keyed : sweep.joints) {
+        nlohmann::json joint = {{"joint", skeleton.names[keyed.joint]}, {"landmark", keyed.landmark}};
+        if (keyed.follower) joint["follows"] = true;
+        else joint["share"] = keyed.share;
+        joints.push_back(joint);
+      }
+      sides.push_back({{"side", sweep.side.empty() ? "central" : sweep.side},
+                       {"axis", {rounded(sweep.axis.x()), rounded(sweep.axis.y()), rounded(sweep.axis.z())}},
+                       {"rest_deg", rounded(sweep.zero_deg)},
+                       {"joints", joints}});
+    }
+    const RomClipSpec& spec = *clip.spec;
+    clips.push_back({{"name", clip.name},
+                     {"animation", clip.clip.name},
+                     {"duration_s", clip.clip.duration},
+                     {"keys", clip.angle_deg.size()},
+                     {"curve", spec.curve == RomCurve::kRiseAndFall ? "rise_and_fall" : "swing"},
+                     {"from_deg", spec.from_deg},
+                     {"to_deg", spec.to_deg},
+                     {"peak_s", clip.peak_time},
+                     {"sides", sides}});
+  }
+  nlohmann::json skipped = nlohmann::json::array();
+  for (const RomSkipped& s : rom.skipped) skipped.push_back({{"name", s.name}, {"reason", s.reason}});
+  return {{"clips", clips}, {"skipped", skipped}};
 }
 
 ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options) {

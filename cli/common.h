@@ -3,11 +3,13 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "anatomy/landmarks.h"
 #include "anatomy/presets.h"
 #include "formats/gltf_document.h"
+#include "pipeline/rom.h"
 
 namespace rigbake::cli {
 
@@ -24,6 +26,16 @@ std::string presetFile(const PresetOptions& options, const std::string& kind, co
 
 // A muscle preset by file path, or by name under presets/muscles/.
 MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path);
+
+// A ROM preset by file path, or by name under presets/rom/ (docs/rom.md).
+RomPreset loadRomPreset(const PresetOptions& options, const std::string& name_or_path);
+
+// "a,b" -> {"a", "b"} for --clips; USAGE for an empty name.
+std::vector<std::string> splitClipNames(const std::string& list, const std::string& option);
+
+// The ROM clips built on a character, for --json and --stats: per clip its name, animation, duration,
+// keys, range and peak, per side the axis, the rest angle and the joints keyed; and the skipped clips.
+nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton);
 
 struct ResolvedCharacter {
   LoadedCharacter loaded;

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   rigbake::cli::addValidateCommand(app, &runner);
   rigbake::cli::addRetargetCommand(app, &runner);
   rigbake::cli::addBuildCommand(app, &runner);
+  rigbake::cli::addRomCommand(app, &runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -12,6 +12,7 @@
 #include "formats/report_html.h"
 #include "formats/report_json.h"
 #include "formats/report_junit.h"
+#include "pipeline/rom.h"
 
 namespace rigbake::cli {
 namespace {
@@ -88,6 +89,10 @@ Report validateBakedFile(const ValidationRequest& request) {
     landmarks_resolved = false;
     landmark_problem = e.what();
   }
+  // --rom: the range-of-motion clips are measured like the file's own (muscle ratios, deformation per
+  // clip). Without landmarks there is no body frame to build them in; the landmark check says why.
+  if (!request.rom.empty() && landmarks_resolved)
+    appendMeasureOnlyClips(&loaded.character, buildRom(loaded.character, landmarks, loadRomPreset(request.presets, request.rom)));
   const Character& character = loaded.character;
   MuscleSet muscles;
   if (!request.muscles.empty()) {

@@ -17,6 +17,7 @@ struct ValidationRequest {
   PresetOptions presets;
   ValidationConfig config;
   bool khronos = false;       // also run the Khronos glTF-Validator when it is installed
+  std::string rom;            // ROM preset (name or path) whose clips are measured too, or empty
 };
 
 Report validateBakedFile(const ValidationRequest& request);

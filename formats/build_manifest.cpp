@@ -48,7 +48,7 @@ std::vector<std::string> referencedFiles(const std::string& gltf_path) {
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", "MANIFEST_INVALID");
-  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "out", "characters"});
+  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "out", "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -73,13 +73,24 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     return weights;
   };
   if (in.has("gltf_weights")) manifest.gltf_weights = gltfWeightsOf(in.at("gltf_weights"));
+  // "rom": a ROM preset file or shipped name, true for the default one, false for none (docs/rom.md).
+  auto romOf = [&](const JsonReader& value) -> std::string {
+    if (value.value().is_boolean()) return value.value().get<bool>() ? default_preset_dir + "/rom/default.json" : "";
+    std::string rom = value.asString();
+    std::string relative = resolve(manifest.directory, rom);
+    if (!rom.empty() && exists(relative)) return relative;
+    std::string shipped = default_preset_dir + "/rom/" + rom + ".json";
+    if (!rom.empty() && exists(shipped)) return shipped;
+    value.fail("ROM preset '" + rom + "' is neither a file (relative to the manifest) nor a shipped ROM preset name");
+  };
+  if (in.has("rom")) manifest.rom = romOf(in.at("rom"));
   manifest.out = resolve(manifest.directory, in.has("out") ? in.at("out").asString() : std::string("build"));
   JsonReader characters = in.at("characters");
   if (characters.arraySize() == 0) characters.fail("must list at least one character");
   std::set<std::string> names;
   for (size_t i = 0; i < characters.arraySize(); ++i) {
     JsonReader item = characters.at(i);
-    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights"});
+    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -95,6 +106,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.preset = item.has("preset") ? presetPath(item.at("preset")) : manifest.preset;
     c.influences = item.has("influences") ? influencesOf(item.at("influences")) : manifest.influences;
     c.gltf_weights = item.has("gltf_weights") ? gltfWeightsOf(item.at("gltf_weights")) : manifest.gltf_weights;
+    c.rom = item.has("rom") ? romOf(item.at("rom")) : manifest.rom;
     manifest.characters.push_back(std::move(c));
   }
   buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work

@@ -189,7 +189,7 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
 
   // Animation: one LINEAR sampler per joint and path, on the clip's sample times.
   for (const BakedClip& clip : bake.clips) {
-    if (clip.times.empty()) continue;
+    if (clip.times.empty() || clip.measure_only) continue;
     tinygltf::Animation& animation = model.animations[clip.gltf_animation];
     std::vector<float> times(clip.times.begin(), clip.times.end());
     const int input = data.addFloats(times, TINYGLTF_TYPE_SCALAR, 1, true);

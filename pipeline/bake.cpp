@@ -266,6 +266,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (const Clip& clip : character.clips) {
     BakedClip baked;
     baked.gltf_animation = clip.gltf_animation;
+    baked.measure_only = clip.measure_only;
     baked.name = clip.name;
     baked.times = sampleTimes(clip, options.fps);
     std::vector<SkinFrame> frames;

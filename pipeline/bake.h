@@ -80,6 +80,7 @@ struct DeformationFigures {
 
 struct BakedClip {
   int gltf_animation = -1;
+  bool measure_only = false;  // Clip::measure_only: measured on (weights, errors), not written
   std::string name;
   std::vector<double> times;
   // local[t][k]: TRS of baked joint k (relative to its parent) at times[t].

@@ -18,6 +18,7 @@ struct BuildCharacter {
   std::string preset;        // preset path for this character (manifest default when not given)
   int influences = 10;
   GltfWeights gltf_weights = GltfWeights::kMilli;
+  std::string rom;           // ROM preset path to measure the bake and validation on too, or empty
   std::string pointer;       // JSON pointer in the manifest, for messages
 };
 
@@ -27,6 +28,7 @@ struct BuildManifest {
   std::string preset;
   int influences = 10;
   GltfWeights gltf_weights = GltfWeights::kMilli;
+  std::string rom;        // default ROM preset path, or empty
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;
 };

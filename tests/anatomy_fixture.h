@@ -36,6 +36,30 @@ inline Resolved resolveShipped(const std::string& path, const NamingMap* forced 
   return resolveWithShippedPresets(loadCharacter(path).character, forced);
 }
 
+// The sample's skeleton with every joint at or below a JO*UpLeg1 cut off (no meshes, no clips): a
+// character without legs.
+inline Character withoutLegs(const Character& character) {
+  const Skeleton& skeleton = character.skeleton;
+  std::vector<int> new_index(skeleton.size(), -1);
+  Skeleton cut;
+  for (int j = 0; j < skeleton.size(); ++j) {
+    bool under_leg = false;
+    for (int a = j; a >= 0; a = skeleton.parents[a]) under_leg |= skeleton.names[a].find("UpLeg") != std::string::npos;
+    if (under_leg) continue;
+    new_index[j] = cut.size();
+    cut.names.push_back(skeleton.names[j]);
+    cut.parents.push_back(skeleton.parents[j] < 0 ? -1 : new_index[skeleton.parents[j]]);
+    cut.nodes.push_back(skeleton.nodes[j]);
+    cut.bind_world.push_back(skeleton.bind_world[j]);
+    cut.rest_local.push_back(skeleton.rest_local[j]);
+    cut.root_parent_world.push_back(skeleton.root_parent_world[j]);
+  }
+  Character legless;
+  legless.source = character.source;
+  legless.skeleton = cut;
+  return legless;
+}
+
 inline const MusclePreset& gowPreset() {
   static const MusclePreset preset = readMusclePreset(presetsDir() + "/muscles/gow_biped.json");
   return preset;

@@ -21,6 +21,7 @@ def main(repo: pathlib.Path) -> int:
     checks += [("muscle_preset.schema.json", p) for p in sorted((repo / "presets" / "muscles").glob("*.json"))]
     checks += [("jiggle_preset.schema.json", p) for p in sorted((repo / "presets" / "jiggle").glob("*.json"))]
     checks += [("body_regions.schema.json", p) for p in sorted((repo / "presets" / "regions").glob("*.json"))]
+    checks += [("rom_preset.schema.json", p) for p in sorted((repo / "presets" / "rom").glob("*.json"))]
     checks += [("build_manifest.schema.json", repo / "examples" / "build_manifest.json")]
     failures = 0
     for schema, path in checks:
@@ -38,12 +39,19 @@ def main(repo: pathlib.Path) -> int:
     jiggle = json.loads((repo / "presets" / "jiggle" / "gow_examples.json").read_text())
     broken_jiggle = copy.deepcopy(jiggle)
     broken_jiggle["jiggles"][0]["stifness"] = 0.5
+    rom = json.loads((repo / "presets" / "rom" / "default.json").read_text())
+    broken_rom = copy.deepcopy(rom)
+    broken_rom["clips"][0]["to_degs"] = 130
+    sided_rom = copy.deepcopy(rom)
+    sided_rom["clips"][0]["joints"][0]["landmark"] = "forearm_l"
     manifest = json.loads((repo / "examples" / "build_manifest.json").read_text())
     broken_manifest = copy.deepcopy(manifest)
     broken_manifest["characters"][1]["muscles"] = "tuned.json"
     negatives = [("build_manifest.schema.json", "character with both muscles and muscles_from", broken_manifest),("muscle_preset.schema.json", "typo'd key", broken_key),
                  ("muscle_preset.schema.json", "unknown landmark", broken_landmark),
-                 ("jiggle_preset.schema.json", "typo'd jiggle key", broken_jiggle)]
+                 ("jiggle_preset.schema.json", "typo'd jiggle key", broken_jiggle),
+                 ("rom_preset.schema.json", "typo'd ROM clip key", broken_rom),
+                 ("rom_preset.schema.json", "ROM joint with a side suffix", sided_rom)]
     for schema, label, document in negatives:
         rejected = not validator(schema).is_valid(document)
         print(f"{'ok  ' if rejected else 'FAIL'} schema rejects a {label}")

@@ -1,6 +1,9 @@
 // Placement of the gow_biped preset on the sample character and on every shared asset: the checks
 // issue 3 asks for (landmarks resolve, locators near the body surface and on their own side, mirror
 // exactness) and the talk's trapezius Python recomputed independently.
+#include <array>
+#include <map>
+
 #include "anatomy/formula_eval.h"
 #include "anatomy/surface_distance.h"
 #include "anatomy_fixture.h"
@@ -29,7 +32,10 @@ TEST_CASE("every character resolves every required landmark") {
     INFO(path);
     test::Resolved r = test::resolveShipped(path);
     for (const auto& [name, landmark] : r.landmarks.landmarks) {
-      bool optional = name.find("twist") != std::string::npos;
+      const std::string base = name.size() > 2 && (name.substr(name.size() - 2) == "_l" || name.substr(name.size() - 2) == "_r")
+                                   ? name.substr(0, name.size() - 2)
+                                   : name;
+      bool optional = isOptionalLandmark(base);
       if (!optional) CHECK(landmark.resolved);
       if (landmark.resolved) {
         CHECK(landmark.joint >= 0);
@@ -39,6 +45,49 @@ TEST_CASE("every character resolves every required landmark") {
     CHECK(r.landmarks.body.height > 0.5);
     CHECK(std::abs(r.landmarks.body.up.dot(r.landmarks.body.lateral)) < 1e-12);
   }
+}
+
+TEST_CASE("every shared character resolves hip, knee and ankle per side; the toe where the rig has one") {
+  // name -> {upper_leg_l, lower_leg_l, foot_l, toe_l ("" when the rig has no toe joint)}
+  const std::map<std::string, std::array<std::string, 4>> expected = {
+      {"sample", {"JOLeftUpLeg1", "JOLeftLeg1", "JOLeftFoot1", "JOLeftToe1"}},
+      {"CesiumMan.glb", {"leg_joint_L_1", "leg_joint_L_2", "leg_joint_L_3", "leg_joint_L_5"}},
+      {"RobotExpressive.glb", {"UpperLegL", "LowerLegL", "FootL", ""}},
+      {"KayKit_Mannequin/manny_med_mod.gltf", {"upperleg.l", "lowerleg.l", "foot.l", "toes.l"}},
+      {"Quaternius_Cyberpunk_Character.glb", {"UpperLeg.L", "LowerLeg.L", "Foot.L", ""}},
+      {"Quaternius_ModularWomen_Soldier.glb", {"UpperLeg.L", "LowerLeg.L", "Foot.L", ""}},
+  };
+  for (const auto& [name, joints] : expected) {
+    const std::string path = name == "sample" ? test::sampleGlbPath() : test::requireAsset(name);
+    if (path.empty()) continue;
+    INFO(name);
+    test::Resolved r = test::resolveShipped(path);
+    const char* bases[] = {"upper_leg", "lower_leg", "foot", "toe"};
+    for (int k = 0; k < 4; ++k) {
+      const std::string left = std::string(bases[k]) + "_l", right = std::string(bases[k]) + "_r";
+      INFO(left);
+      if (joints[k].empty()) {
+        CHECK_FALSE(r.landmarks.has(left));
+        continue;
+      }
+      REQUIRE(r.landmarks.has(left));
+      REQUIRE(r.landmarks.has(right));
+      CHECK(r.landmarks.get(left).from_joint == joints[k]);
+      // Each leg on its own side of the sagittal plane.
+      CHECK(r.landmarks.body.lateralOffset(r.landmarks.get(left).position) > 0.0);
+      CHECK(r.landmarks.body.lateralOffset(r.landmarks.get(right).position) < 0.0);
+    }
+  }
+}
+
+TEST_CASE("a skeleton without legs still resolves, with its leg landmarks unresolved") {
+  test::Resolved full = test::resolveShipped(test::sampleGlbPath());
+  Character legless = test::withoutLegs(full.character);
+  test::Resolved r = test::resolveWithShippedPresets(legless);
+  CHECK(r.landmarks.map_name == "gow");
+  for (const char* name : {"upper_leg_l", "lower_leg_r", "foot_l", "toe_r"}) CHECK_FALSE(r.landmarks.has(name));
+  for (const char* name : {"pelvis", "chest", "upper_arm_l", "hand_r"})
+    CHECK(r.landmarks.get(name).from_joint == full.landmarks.get(name).from_joint);
 }
 
 TEST_CASE("landmark sources: maps where names fit, structure for CesiumMan, derivations for missing joints") {
