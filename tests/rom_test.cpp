@@ -377,6 +377,6 @@ TEST_CASE("measure-only ROM clips move the bake's figures but are not written") 
   REQUIRE(measured.clips.size() == 10);
   CHECK(measured.clips.front().measure_only);
   CHECK(measured.error.overall.max_displacement > 0.0);
-  const tinygltf::Model model = bakedModel(*loaded.document, r.character, muscles, measured);
+  const tinygltf::Model model = bakedModel(*loaded.document, r.character, measured);
   CHECK(model.animations.empty());
 }
