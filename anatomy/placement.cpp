@@ -64,31 +64,37 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
   std::map<std::string, Eigen::Vector3d> placed;
   std::vector<MusclePart> lefts, rights;
   for (const PresetPart& spec : preset.parts) {
-    std::string origin_attach = sidedName(chooseAttach(spec.origin_attach, landmarks, "l", preset, spec, "origin_attach"), "l");
-    std::string insertion_attach =
-        sidedName(chooseAttach(spec.insertion_attach, landmarks, "l", preset, spec, "insertion_attach"), "l");
-    FormulaContext context{&skeleton, &landmarks, "l", preset.reference_height, &placed, preset.file};
-    Eigen::Vector3d origin = evaluateFormula(spec.origin, context);
-    placed[spec.name + ".origin"] = origin;
-    Eigen::Vector3d insertion = evaluateFormula(spec.insertion, context);
-    placed[spec.name + ".insertion"] = insertion;
-    Eigen::Vector3d driver = spec.has_driver ? evaluateFormula(spec.driver, context) : (origin + insertion) / 2.0;
+    // An optional part (a leg muscle on a character without legs) is left out when a landmark it
+    // needs does not resolve; any other part fails the placement with the landmark's name.
+    try {
+      std::string origin_attach = sidedName(chooseAttach(spec.origin_attach, landmarks, "l", preset, spec, "origin_attach"), "l");
+      std::string insertion_attach =
+          sidedName(chooseAttach(spec.insertion_attach, landmarks, "l", preset, spec, "insertion_attach"), "l");
+      FormulaContext context{&skeleton, &landmarks, "l", preset.reference_height, &placed, preset.file};
+      Eigen::Vector3d origin = evaluateFormula(spec.origin, context);
+      placed[spec.name + ".origin"] = origin;
+      Eigen::Vector3d insertion = evaluateFormula(spec.insertion, context);
+      placed[spec.name + ".insertion"] = insertion;
+      Eigen::Vector3d driver = spec.has_driver ? evaluateFormula(spec.driver, context) : (origin + insertion) / 2.0;
 
-    MusclePart part;
-    part.group = spec.group;
-    part.name = spec.name;
-    part.side = "Left";
-    int origin_joint = landmarks.get(origin_attach).joint;
-    part.origin = locatorOn(skeleton, origin_joint, origin);
-    part.insertion = locatorOn(skeleton, landmarks.get(insertion_attach).joint, insertion);
-    part.driver = locatorOn(skeleton, origin_joint, driver);
-    part.compression = spec.compression;
-    part.stretch = spec.stretch;
-    part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
-    part.weight_radius = spec.weight_radius_ref_m * scale;
-    part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
-    if (sides != Sides::kLeft) rights.push_back(mirrorPart(part, skeleton, landmarks, origin_attach, insertion_attach));
-    lefts.push_back(std::move(part));
+      MusclePart part;
+      part.group = spec.group;
+      part.name = spec.name;
+      part.side = "Left";
+      int origin_joint = landmarks.get(origin_attach).joint;
+      part.origin = locatorOn(skeleton, origin_joint, origin);
+      part.insertion = locatorOn(skeleton, landmarks.get(insertion_attach).joint, insertion);
+      part.driver = locatorOn(skeleton, origin_joint, driver);
+      part.compression = spec.compression;
+      part.stretch = spec.stretch;
+      part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
+      part.weight_radius = spec.weight_radius_ref_m * scale;
+      part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
+      if (sides != Sides::kLeft) rights.push_back(mirrorPart(part, skeleton, landmarks, origin_attach, insertion_attach));
+      lefts.push_back(std::move(part));
+    } catch (const Error& error) {
+      if (!spec.optional || error.code() != "LANDMARK_UNRESOLVED") throw;
+    }
   }
   if (sides != Sides::kRight) set.parts.insert(set.parts.end(), lefts.begin(), lefts.end());
   set.parts.insert(set.parts.end(), rights.begin(), rights.end());

@@ -56,6 +56,7 @@ struct PresetPart {
   double stretch = 1.5;
   double bulge[2] = {0.0, 0.0};
   double weight_radius_ref_m = 0.0;  // 0: derive from the body measure
+  bool optional = false;  // skipped (both sides) when a landmark it needs does not resolve
   std::string pointer;
 };
 

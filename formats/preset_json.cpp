@@ -169,7 +169,7 @@ MusclePreset readMusclePreset(const std::string& path) {
   for (size_t i = 0; i < muscles.arraySize(); ++i) {
     JsonReader item = muscles.at(i);
     item.allowKeys({"group", "group_aliases", "name", "why", "origin_attach", "insertion_attach", "origin", "insertion", "driver",
-                    "compression", "stretch", "bulge", "weight_radius_ref_m"});
+                    "compression", "stretch", "bulge", "weight_radius_ref_m", "optional"});
     PresetPart part;
     part.pointer = item.pointer();
     part.group = item.at("group").asString();
@@ -200,6 +200,7 @@ MusclePreset readMusclePreset(const std::string& path) {
       part.bulge[0] = bulge.at(0).asNumber();
       part.bulge[1] = bulge.at(1).asNumber();
     }
+    part.optional = item.has("optional") && item.at("optional").asBool();
     if (item.has("weight_radius_ref_m")) {
       part.weight_radius_ref_m = item.at("weight_radius_ref_m").asNumber();
       if (part.weight_radius_ref_m < 0) item.at("weight_radius_ref_m").fail("must not be negative");
