@@ -38,6 +38,7 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
   return {{"units", {{"volume", "percent change against the bind pose"}, {"skin_move", "mm along the input skinning's normal, + out"}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
+          {"unmeasured_regions", quality.unmeasured_regions},
           {"muscles", muscles}};
 }
 

@@ -130,16 +130,6 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
   return tracks;
 }
 
-InfluenceSet normalized(const InfluenceSet& set) {
-  InfluenceSet out = set;
-  for (int v = 0; v < set.vertexCount(); ++v) {
-    double sum = 0.0;
-    for (int k = 0; k < set.slots_per_vertex; ++k) sum += set.weights[v * set.slots_per_vertex + k];
-    for (int k = 0; k < set.slots_per_vertex; ++k) out.weights[v * set.slots_per_vertex + k] /= sum;
-  }
-  return out;
-}
-
 // Per skinned mesh part (index into Character::meshes), its rounded weights with skeleton indices.
 using Approximations = std::vector<std::pair<int, InfluenceSet>>;
 
@@ -214,7 +204,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (const MeshPart& mesh : character.meshes) {
     if (!mesh.skinned || mesh.positions.empty()) continue;
     surfaces.push_back(buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3)));
-    shares.push_back(muscleShares(mesh, surfaces.back(), muscles, radii, options.weights));
+    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights));
   }
   result.muscles = muscles;
   chooseCarrierJoints(character, surfaces, shares, &result.muscles);
@@ -235,8 +225,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
         fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
       MeasuredPart part;
       part.mesh_part = static_cast<int>(p);
-      part.input = normalized(base);
-      part.rig = normalized(addMuscleInfluences(part.input, surfaces[skinned_index], shares[skinned_index], rigged,
+      part.input = normalizedInfluences(base);
+      part.rig = normalizedInfluences(addMuscleInfluences(part.input, surfaces[skinned_index], shares[skinned_index], rigged,
                                                 muscle_joints, options.weights));
       ++skinned_index;
       measured.push_back(std::move(part));

@@ -38,33 +38,38 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
   const Skeleton& skeleton = character.skeleton;
   const int joint_count = skeleton.size();
   DeformationQuality quality;
-  for (const BodyRegion& region : regions) quality.regions.push_back(region.name);
 
-  // Weld each part once; cut each region out of it and close it.
-  const double weld = 1e-6 * std::max(muscles.body_height, 1e-3);
+  // Weld each part once; cut each region out of it and close it. Regions too flat to enclose a
+  // meaningful volume are left out of the figures (and listed).
+  std::vector<int> mesh_parts;
+  for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
+  std::vector<std::vector<std::vector<int>>> region_triangles;
+  for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
+  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles.body_height, 1e-3));
+  std::vector<size_t> kept;
+  quality.regions.clear();
+  for (size_t r = 0; r < regions.size(); ++r) {
+    if (measured.region_measured[r]) {
+      kept.push_back(r);
+      quality.regions.push_back(regions[r].name);
+    } else {
+      quality.unmeasured_regions.push_back(regions[r].name);
+    }
+  }
   std::vector<PreparedPart> prepared;
   for (size_t p = 0; p < parts.size(); ++p) {
     PreparedPart part;
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
-    part.surface = buildVolumeSurface(*part.mesh, weld);
-    std::vector<int> welded_of_part(part.mesh->triangles.size(), -1);
-    for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) welded_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
-    for (const BodyRegion& region : regions) {
-      std::vector<int> triangles;
-      if (p < region.triangles.size()) {
-        for (int t : region.triangles[p]) {
-          if (welded_of_part[t] >= 0) triangles.push_back(welded_of_part[t]);
-        }
-      }
-      part.regions.push_back(closePatch(part.surface, triangles));
-    }
+    part.surface = std::move(measured.surfaces[p]);
+    for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     prepared.push_back(std::move(part));
   }
+  const size_t region_count = kept.size();
 
   auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame) {
     FrameVolumes out;
-    out.regions.assign(regions.size(), {0, 0, 0});
+    out.regions.assign(region_count, {0, 0, 0});
     for (const PreparedPart& part : prepared) {
       std::vector<Eigen::Vector3d> posed[3];
       if (frame == nullptr) {
@@ -78,7 +83,7 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
       }
       for (int k = 0; k < 3; ++k) {
         out.body[k] += enclosedVolume(part.surface.whole, posed[k]);
-        for (size_t r = 0; r < regions.size(); ++r) out.regions[r][k] += enclosedVolume(part.regions[r], posed[k]);
+        for (size_t r = 0; r < region_count; ++r) out.regions[r][k] += enclosedVolume(part.regions[r], posed[k]);
       }
     }
     return out;
@@ -86,7 +91,7 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
 
   const FrameVolumes bind = volumesOf(nullptr);
   quality.body_volume = bind.body[0];
-  for (size_t r = 0; r < regions.size(); ++r) quality.region_volumes.push_back(bind.regions[r][0]);
+  for (size_t r = 0; r < region_count; ++r) quality.region_volumes.push_back(bind.regions[r][0]);
   auto change = [](double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; };
 
   // Each muscle's most compressed and most stretched sample over every clip.
@@ -101,7 +106,7 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
     const MeasuredClip& clip = clips[c];
     ClipQuality figures;
     figures.clip = clip.name;
-    figures.regions.resize(regions.size());
+    figures.regions.resize(region_count);
     double worst = -1.0;
     for (size_t t = 0; t < clip.times.size(); ++t) {
       const FrameVolumes volumes = volumesOf(&(*clip.frames)[t]);
@@ -114,7 +119,7 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
         worst = std::abs(rig_change);
         figures.worst_frame = static_cast<int>(t);
       }
-      for (size_t r = 0; r < regions.size(); ++r) {
+      for (size_t r = 0; r < region_count; ++r) {
         keepExtreme(change(volumes.regions[r][0], bind.regions[r][0]), time, &figures.regions[r].input);
         keepExtreme(change(volumes.regions[r][1], bind.regions[r][1]), time, &figures.regions[r].dual_quaternion);
         keepExtreme(change(volumes.regions[r][2], bind.regions[r][2]), time, &figures.regions[r].rig);

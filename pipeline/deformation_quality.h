@@ -76,6 +76,8 @@ struct DeformationQuality {
   double body_volume = 0.0;  // bind pose, cubic scene units
   std::vector<std::string> regions;
   std::vector<double> region_volumes;  // bind pose
+  // Regions whose closed piece is too flat to measure (pipeline/skin_volume.h kMinRegionCompactness).
+  std::vector<std::string> unmeasured_regions;
   std::vector<ClipQuality> clips;
   std::vector<MuscleQuality> muscles;
 };

@@ -121,6 +121,16 @@ void appendLe16(std::vector<std::uint8_t>& bytes, unsigned value) {
 
 }  // namespace
 
+InfluenceSet normalizedInfluences(const InfluenceSet& set) {
+  InfluenceSet out = set;
+  for (int v = 0; v < set.vertexCount(); ++v) {
+    double sum = 0.0;
+    for (int k = 0; k < set.slots_per_vertex; ++k) sum += set.weights[v * set.slots_per_vertex + k];
+    for (int k = 0; k < set.slots_per_vertex; ++k) out.weights[v * set.slots_per_vertex + k] /= sum;
+  }
+  return out;
+}
+
 InfluenceSet influencesFromMesh(const MeshPart& part) {
   InfluenceSet set;
   set.slots_per_vertex = part.influences_per_vertex;

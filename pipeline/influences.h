@@ -95,6 +95,9 @@ bool parseGltfWeights(const std::string& name, GltfWeights* weights);
 // set to joint 0. Weights are left as the file stored them, not renormalized.
 InfluenceSet influencesFromMesh(const MeshPart& part);
 
+// Each vertex's weights divided by their sum (which must not be 0: run checkInfluences() first).
+InfluenceSet normalizedInfluences(const InfluenceSet& set);
+
 // Every problem that would make pruning or quantizing meaningless: a joint outside [0, joint_count)
 // in a non-zero slot, a NaN/infinite or negative weight, a vertex whose weights sum to 0.
 // Run it first and report what it finds: pruneInfluences() and quantizeInfluences() throw Error

@@ -4,6 +4,8 @@
 // weight field it only blurs, so no shrink compensation is needed.
 #include "pipeline/muscle_weights.h"
 
+#include "pipeline/muscle_joint.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -17,6 +19,20 @@ double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, con
   double length_squared = ab.squaredNorm();
   double t = length_squared > 0 ? std::clamp((p - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
   return (p - (a + ab * t)).norm();
+}
+
+Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double length_squared = ab.squaredNorm();
+  const double t = length_squared > 0 ? std::clamp((p - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
+  return a + ab * t;
+}
+
+// Smoothstep from facing_start (no share) to facing_full (all of it) on the cosine between the
+// vertex's direction from the muscle's axis and the muscle's up axis.
+double sideFactor(double facing, const MuscleWeightOptions& options) {
+  const double x = std::clamp((facing - options.facing_start) / (options.facing_full - options.facing_start), 0.0, 1.0);
+  return x * x * (3.0 - 2.0 * x);
 }
 
 double falloff(double distance, double radius) {
@@ -96,7 +112,7 @@ std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part)
   return path;
 }
 
-MuscleShares muscleShares(const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
+MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
                           const std::vector<double>& radii, const MuscleWeightOptions& options) {
   assert(radii.size() == muscles.parts.size());
   std::vector<Eigen::Vector3d> welded_position(surface.weldedCount());
@@ -105,9 +121,15 @@ MuscleShares muscleShares(const MeshPart& part, const SurfaceGraph& surface, con
   for (size_t m = 0; m < muscles.parts.size(); ++m) {
     const MusclePart& muscle = muscles.parts[m];
     share[m].assign(surface.weldedCount(), 0.0);
+    // A muscle drives the skin on its own side of the limb (its belly's side, the rest up axis): a bulge
+    // that moved the whole circumference would only shift the limb, pushing its far side in.
+    const Eigen::Vector3d up = muscleRestFrame(muscle, skeleton).up;
     for (int w = 0; w < surface.weldedCount(); ++w) {
-      share[m][w] = options.peak_share *
-                    falloff(distanceToSegment(welded_position[w], muscle.origin.world, muscle.insertion.world), radii[m]);
+      const Eigen::Vector3d& p = welded_position[w];
+      const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);
+      const Eigen::Vector3d away = p - closest;
+      const double facing = away.norm() > 0.0 ? away.normalized().dot(up) : 1.0;
+      share[m][w] = options.peak_share * falloff(away.norm(), radii[m]) * sideFactor(facing, options);
     }
     smooth(&share[m], surface, options);
   }

@@ -16,6 +16,10 @@ namespace rigbake {
 struct MuscleWeightOptions {
   double peak_share = 1.0;         // at the muscle's axis a muscle takes this share of its carrier's weight
   double max_total_share = 1.0;    // all muscles together take at most this share of a joint's weight
+  // Only skin on the muscle's own side takes its share: from none where the vertex's direction from the
+  // axis makes cosine facing_start with the muscle's up axis to all of it at facing_full.
+  double facing_start = -0.2;
+  double facing_full = 0.5;
   int smoothing_iterations = 4;    // Laplacian (umbrella) passes over the welded surface
   double smoothing_lambda = 0.5;   // step of each pass
   // Most influences a vertex may end with (the talk's God of War Ragnarök maximum): only the strongest
@@ -34,10 +38,11 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
 std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part);
 
 // share[m][w]: how much of its carrier's weight muscle m may take at welded vertex w, before the
-// influence budget: peak_share * (1 - x^2)^2 with x = distance to the segment / radius, smoothed.
+// influence budget: peak_share * (1 - x^2)^2 * side, x = distance to the segment / radius, side the
+// smoothstep of facing (see MuscleWeightOptions), smoothed over the surface.
 using MuscleShares = std::vector<std::vector<double>>;
-MuscleShares muscleShares(const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
-                          const std::vector<double>& radii, const MuscleWeightOptions& options = {});
+MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface,
+                          const MuscleSet& muscles, const std::vector<double>& radii, const MuscleWeightOptions& options = {});
 
 // Each part's carrier: among the joints it spans, the one whose weight its share field covers most,
 // summed over every skinned mesh part (lowest joint index on a tie). A part whose carrier is already

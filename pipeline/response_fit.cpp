@@ -14,6 +14,8 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 
@@ -133,8 +135,17 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
   };
 
-  // Surfaces, regions, and which vertices each fitted muscle moves.
-  const double weld = 1e-6 * std::max(muscles->body_height, 1e-3);
+  // Surfaces, regions (those the figures measure), and which vertices each fitted muscle moves.
+  std::vector<int> mesh_parts;
+  for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
+  std::vector<std::vector<std::vector<int>>> region_triangles;
+  for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
+  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles->body_height, 1e-3));
+  std::vector<size_t> kept;
+  for (size_t r = 0; r < regions.size(); ++r) {
+    if (measured.region_measured[r]) kept.push_back(r);
+  }
+  const int region_count = static_cast<int>(kept.size());
   std::vector<FitPart> fit_parts;
   std::vector<Eigen::Affine3d> bind_inverse(muscle_count);
   for (int m = 0; m < muscle_count; ++m) bind_inverse[m] = muscleBindTransform(muscles->parts[m], skeleton).inverse();
@@ -142,18 +153,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     FitPart part;
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
-    part.surface = buildVolumeSurface(*part.mesh, weld);
-    std::vector<int> welded_of_part(part.mesh->triangles.size(), -1);
-    for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) welded_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
-    for (const BodyRegion& region : regions) {
-      std::vector<int> triangles;
-      if (p < region.triangles.size()) {
-        for (int t : region.triangles[p]) {
-          if (welded_of_part[t] >= 0) triangles.push_back(welded_of_part[t]);
-        }
-      }
-      part.regions.push_back(closePatch(part.surface, triangles));
-    }
+    part.surface = std::move(measured.surfaces[p]);
+    for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     part.muscle_vertices.resize(part.surface.weldedCount());
     const InfluenceSet& rig = parts[p].rig;
     for (int w = 0; w < part.surface.weldedCount(); ++w) {
@@ -167,14 +168,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
     fit_parts.push_back(std::move(part));
   }
-  const int region_count = static_cast<int>(regions.size());
-  double bind_body = 0.0;
-  std::vector<double> bind_region(region_count, 0.0);
-  for (const FitPart& part : fit_parts) {
-    const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, part.mesh->positions);
-    bind_body += enclosedVolume(part.surface.whole, welded);
-    for (int r = 0; r < region_count; ++r) bind_region[r] += enclosedVolume(part.regions[r], welded);
-  }
+  const double bind_body = measured.body_volume;
+  std::vector<double> bind_region;
+  for (size_t r : kept) bind_region.push_back(measured.region_volumes[r]);
   // Input-skinning region changes per pose: the dead zones do not depend on the fit.
   std::vector<std::vector<double>> input_region_change(poses.size(), std::vector<double>(region_count, 0.0));
   for (size_t i = 0; i < poses.size(); ++i) {
@@ -211,7 +207,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   double best_rms = 0.0;
   Eigen::MatrixXd best_a;
   Eigen::VectorXd best_b;
-  double damping = 1e-4;
+  double damping = 1e-3;
   for (int iteration = 0; iteration <= options.iterations; ++iteration) {
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
@@ -298,10 +294,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       best_objective = objective;
       best_theta = theta;
       best_rms = rms;
-      damping = std::max(damping / 3.0, 1e-8);
+      damping = std::max(damping / 3.0, 1e-6);
     } else {
       theta = best_theta;
-      damping *= 4.0;
+      damping *= 10.0;
     }
     if (iteration == options.iterations) break;
 
@@ -327,11 +323,14 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       b = best_b;
     }
     {
-      // Damping rows: sqrt(lambda) * step = 0, in amplitude units.
+      // Damping rows (Marquardt): sqrt(lambda * diag(A^T A)) * step = 0, so the damping scales with
+      // how strongly each amplitude moves the volumes.
       const Eigen::Index rows_before = a.rows();
+      const Eigen::VectorXd diagonal = a.colwise().squaredNorm().transpose();
       a.conservativeResize(rows_before + unknowns, Eigen::NoChange);
       b.conservativeResize(rows_before + unknowns);
-      a.bottomRows(unknowns) = std::sqrt(damping) * Eigen::MatrixXd::Identity(unknowns, unknowns);
+      a.bottomRows(unknowns).setZero();
+      for (int u = 0; u < unknowns; ++u) a(rows_before + u, u) = std::sqrt(damping * std::max(diagonal[u], 1e-12));
       b.tail(unknowns).setZero();
     }
     auto lowerBound = [&](int u) {

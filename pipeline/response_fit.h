@@ -20,22 +20,22 @@ namespace rigbake {
 
 struct ResponseFitOptions {
   int max_poses = 160;      // poses sampled evenly from every clip's sample times
-  int iterations = 4;       // Gauss-Newton steps (each re-linearizes the volumes)
+  int iterations = 6;       // Levenberg-Marquardt steps (each re-linearizes the volumes)
   // Residual weights. Volumes are fractions of their bind volume; the prior is on amplitudes (1 = the
   // talk's response), scaled by how far the poses drive each key.
-  double body_weight = 100;
-  double region_weight = 1.0;
-  double prior_weight = 0.03;
+  double body_weight = 30.0;
+  double region_weight = 30.0;
+  double prior_weight = 0.05;
   // A region is only pushed back when it leaves [min(input, 0) - margin, max(input, 0) + gain], the
   // input skinning's own change widened: muscles need not undo what the rig does not make worse, and
   // a flexed arm may swell where its muscles bulge.
   double region_margin = 0.005;
   double region_gain = 0.3;
   // Bounds on the amplitudes. Compression: [0, max_amplitude] (a compressed muscle never pulls the
-  // skin in); stretch: [0, max_stretch_amplitude] (at most the talk's full volume-preserving thinning);
+  // skin in); stretch: [0, max_stretch_amplitude] (a stretched muscle thins, never swells);
   // twist: [-min_twist_amplitude, max_twist_amplitude] (a twist may ease a bulge a little).
   double max_amplitude = 4.0;
-  double max_stretch_amplitude = 4;
+  double max_stretch_amplitude = 4.0;
   double max_twist_amplitude = 1.5;
   double min_twist_amplitude = 0.0;
 };

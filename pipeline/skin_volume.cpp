@@ -158,4 +158,51 @@ std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::
   return normals;
 }
 
+double patchArea(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded) {
+  double area = 0.0;
+  for (const auto& t : patch.triangles) area += 0.5 * (welded[t[1]] - welded[t[0]]).cross(welded[t[2]] - welded[t[0]]).norm();
+  for (const std::vector<int>& hole : patch.holes) {
+    const Eigen::Vector3d centre = holeCentre(hole, welded);
+    for (size_t k = 0; k < hole.size(); ++k)
+      area += 0.5 * (welded[hole[k]] - centre).cross(welded[hole[(k + 1) % hole.size()]] - centre).norm();
+  }
+  return area;
+}
+
+MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<int>& mesh_parts,
+                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance) {
+  MeasuredSurfaces out;
+  const size_t region_count = region_triangles.size();
+  out.region_volumes.assign(region_count, 0.0);
+  std::vector<double> region_area(region_count, 0.0);
+  for (size_t p = 0; p < mesh_parts.size(); ++p) {
+    const MeshPart& mesh = character.meshes[mesh_parts[p]];
+    VolumeSurface surface = buildVolumeSurface(mesh, weld_tolerance);
+    std::vector<int> welded_of_part(mesh.triangles.size(), -1);
+    for (size_t t = 0; t < surface.part_triangle.size(); ++t) welded_of_part[surface.part_triangle[t]] = static_cast<int>(t);
+    const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
+    out.body_volume += enclosedVolume(surface.whole, welded);
+    std::vector<ClosedPatch> patches;
+    for (size_t r = 0; r < region_count; ++r) {
+      std::vector<int> triangles;
+      if (p < region_triangles[r].size()) {
+        for (int t : region_triangles[r][p]) {
+          if (welded_of_part[t] >= 0) triangles.push_back(welded_of_part[t]);
+        }
+      }
+      patches.push_back(closePatch(surface, triangles));
+      out.region_volumes[r] += enclosedVolume(patches.back(), welded);
+      region_area[r] += patchArea(patches.back(), welded);
+    }
+    out.surfaces.push_back(std::move(surface));
+    out.regions.push_back(std::move(patches));
+  }
+  for (size_t r = 0; r < region_count; ++r) {
+    const double volume = out.region_volumes[r], area = region_area[r];
+    const double compactness = area > 0.0 ? 36.0 * 3.14159265358979323846 * volume * volume / (area * area * area) : 0.0;
+    out.region_measured.push_back(volume > 0.0 && compactness >= kMinRegionCompactness);
+  }
+  return out;
+}
+
 }  // namespace rigbake

@@ -49,6 +49,27 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
 void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
                        std::vector<Eigen::Vector3d>* gradient);
 
+// Surface area of the patch, caps included.
+double patchArea(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
+
+// A region is measured only when, at the bind pose, its closed piece encloses a positive volume that is
+// not negligible for its area: the isoperimetric quotient 36 pi V^2 / A^3 (1 for a ball, 0.6 for a
+// limb segment three radii long) at least this. A thin flap of skin (a shoulder strap cut between two
+// shells) has a volume that sign and rounding dominate, and its percentages mean nothing.
+constexpr double kMinRegionCompactness = 0.02;
+
+// The measured parts' welded surfaces, each body region cut out of them and closed, and the bind
+// volumes; shared by the deformation-quality figures and the response fit so they measure the same.
+struct MeasuredSurfaces {
+  std::vector<VolumeSurface> surfaces;          // per measured part
+  std::vector<std::vector<ClosedPatch>> regions;  // [part][region]
+  double body_volume = 0.0;
+  std::vector<double> region_volumes;            // bind, summed over parts
+  std::vector<char> region_measured;             // passes kMinRegionCompactness
+};
+MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<int>& mesh_parts,
+                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance);
+
 // Area-weighted vertex normals of the welded triangles (unit; zero for a vertex on no triangle).
 std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
 
