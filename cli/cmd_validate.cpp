@@ -22,6 +22,8 @@ struct ValidateCommandOptions {
   std::string config;
   std::string report_dir;
   std::string rom;
+  std::string regions = "body";
+  bool pictures = true;
   bool khronos = false;
   bool json = false;
   PresetOptions presets;
@@ -36,6 +38,8 @@ int run(const ValidateCommandOptions& options) {
   if (!options.config.empty()) request.config = readValidationConfig(options.config);
   request.khronos = options.khronos;
   request.rom = options.rom;
+  request.regions = options.regions;
+  request.pictures = options.pictures;
   const Report report = validateBakedFile(request);
   writeReports(report, reportPathsIn(options.report_dir));
   const std::string character_name = fileNameOf(options.baked);
@@ -62,7 +66,8 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand(
       "validate",
       "Check a baked character (landmarks, muscle locators, muscle length ratios over every clip, skin weights and "
-      "indices, influence counts, packed-weight deformation error, glTF structure, optionally the Khronos "
+      "indices, influence counts, packed-weight deformation error, volume kept per body region and bulge per muscle "
+      "against the input skinning and dual quaternions (with pictures), glTF structure, optionally the Khronos "
       "glTF-Validator) and write report.json, report.junit.xml and report.html into --report DIR. Exit 0 when every "
       "error-severity check passes, 1 otherwise. docs/validate.md lists the checks.");
   command->add_option("baked", options->baked, "Baked character (.glb, .gltf, .vrm) from `rigbake bake`")->required();
@@ -83,6 +88,11 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
                       "after the file, or write --rom=PRESET")
       ->expected(0, 1)
       ->default_str("default");
+  command->add_option("--regions", options->regions,
+                      "Body regions for the volume figures (a file, or a name under presets/regions/)")
+      ->capture_default_str();
+  command->add_flag("!--no-pictures", options->pictures,
+                    "Leave the deformation pictures out of report.html (the figures stay)");
   command->add_flag("--json", options->json, "Also print report.json on stdout");
   addPresetOptions(command, &options->presets);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

@@ -12,6 +12,8 @@
 #include "formats/report_html.h"
 #include "formats/report_json.h"
 #include "formats/report_junit.h"
+#include "formats/preset_json.h"
+#include "pipeline/baked_quality.h"
 #include "pipeline/rom.h"
 
 namespace rigbake::cli {
@@ -108,6 +110,14 @@ Report validateBakedFile(const ValidationRequest& request) {
   inputs.landmark_problem = landmark_problem;
   inputs.muscles = request.muscles.empty() ? nullptr : &muscles;
   inputs.file = &file;
+  BakedQuality quality;
+  if (landmarks_resolved) {
+    BakedQualityOptions quality_options;
+    quality_options.pictures = request.pictures;
+    quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(request.presets, "regions", request.regions)),
+                                  file, quality_options);
+    inputs.quality = &quality;
+  }
   if (request.khronos) inputs.khronos = runKhronosValidator(request.baked);
   else inputs.khronos.skip_reason = "not requested (pass --khronos)";
   return validateBakedCharacter(inputs, request.config);

@@ -18,6 +18,8 @@ struct ValidationRequest {
   ValidationConfig config;
   bool khronos = false;       // also run the Khronos glTF-Validator when it is installed
   std::string rom;            // ROM preset (name or path) whose clips are measured too, or empty
+  std::string regions = "body";  // region preset for the deformation-quality figures (name or path)
+  bool pictures = true;       // render the deformation pictures for report.html
 };
 
 Report validateBakedFile(const ValidationRequest& request);

@@ -260,6 +260,8 @@ void readMuscleNodes(const tinygltf::Model& model, const Character& character, B
     text("role", &node.role);
     text("origin_joint", &node.origin_joint);
     text("insertion_joint", &node.insertion_joint);
+    // carrier_joint: the joint a skinned node takes its weight from (bakes before it was written have none).
+    if (gltfMember(block, "carrier_joint").IsString()) node.carrier_joint = gltfMember(block, "carrier_joint").Get<std::string>();
     number("compression", &node.compression);
     number("stretch", &node.stretch);
     auto suffix = kSuffix.find(node.role);
@@ -269,7 +271,7 @@ void readMuscleNodes(const tinygltf::Model& model, const Character& character, B
       data->structure.push_back({"/nodes/" + std::to_string(n) + "/name",
                                  "'" + node.name + "' should be '" + node.muscle + suffix->second + "'"});
     }
-    for (const std::string* joint : {&node.origin_joint, &node.insertion_joint}) {
+    for (const std::string* joint : {&node.origin_joint, &node.insertion_joint, &node.carrier_joint}) {
       if (!joint->empty() && character.skeleton.find(*joint) < 0)
         data->structure.push_back({pointer, "attach joint '" + *joint + "' is not a joint of the skeleton"});
     }

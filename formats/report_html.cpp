@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "formats/png_write.h"
 #include "formats/report_junit.h"
 
 namespace rigbake {
@@ -515,6 +516,10 @@ header .sub { color: var(--muted); }
 main { padding: 16px 32px 40px; max-width: 1260px; }
 section { background: #fff; border: 1px solid #dde1e6; border-radius: 8px; padding: 14px 18px; margin: 16px 0; }
 section h2 { margin: 0 0 8px; font-size: 16px; }
+.pictures figure { display: inline-block; margin: 6px 10px 10px 0; max-width: 620px; }
+.pictures figcaption { font-size: 12px; color: var(--muted); }
+table.quality td:nth-child(n+3) { text-align: right; font-variant-numeric: tabular-nums; }
+table.quality tr.fail td { color: #b3261e; font-weight: 600; }
 section p.explain { margin: 0 0 10px; color: var(--muted); max-width: 900px; }
 .row { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
 .row > section { flex: 1 1 580px; min-width: 0; }
@@ -565,6 +570,68 @@ svg.view { background: #fbfbfc; border: 1px solid #eceef1; border-radius: 6px; }
 table.memory svg rect { fill: #30638e; } tr.this-file td { background: #eaf2fb; font-weight: 600; }
 .tag { font-size: 11px; background: #30638e; color: #fff; padding: 1px 6px; border-radius: 8px; }
 )";
+
+}  // namespace
+
+namespace {
+
+std::string percent(double fraction) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%+.2f", 100.0 * fraction);
+  return text;
+}
+
+// Volume change per clip (whole body) and the worst regions, input skinning / dual quaternions / rig,
+// then the pictures.
+std::string qualitySection(const Report& report) {
+  const BakedQuality& baked = report.quality;
+  std::string html = "<section id=\"quality\"><h2>Deformation quality: volume and bulge</h2>\n<p class=\"explain\">"
+                     "Largest volume change against the bind pose over each clip, in percent, of the input skinning "
+                     "(the file's weights with each muscle joint's weight returned to its carrier), of dual-quaternion "
+                     "skinning of those weights, and of the baked rig as an engine evaluates it "
+                     "(docs/deformation-quality.md). Regions are closed by capping their holes.</p>\n";
+  if (!baked.measured) return html + "<p class=\"note\">Not measured: " + esc(baked.skip_reason) + "</p>\n</section>\n";
+  const DeformationQuality& quality = baked.quality;
+  html += "<table class=\"quality\"><tr><th>clip</th><th>region</th><th>input %</th><th>dual quaternion %</th><th>rig %</th></tr>\n";
+  for (const ClipQuality& clip : quality.clips) {
+    auto row = [&](const std::string& region, const SkinningVolumes& v) {
+      const bool worse = std::min(v.input.change, 0.0) - v.rig.change > 0.01;
+      html += "<tr" + std::string(worse ? " class=\"fail\"" : "") + "><td>" + esc(clip.clip) + "</td><td>" + esc(region) +
+              "</td><td>" + percent(v.input.change) + "</td><td>" + percent(v.dual_quaternion.change) + "</td><td>" +
+              percent(v.rig.change) + "</td></tr>\n";
+    };
+    row("whole body", clip.body);
+    // The three regions where the rig departs most from the input skinning.
+    std::vector<size_t> order(clip.regions.size());
+    for (size_t r = 0; r < order.size(); ++r) order[r] = r;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+      return std::abs(clip.regions[a].rig.change - clip.regions[a].input.change) >
+             std::abs(clip.regions[b].rig.change - clip.regions[b].input.change);
+    });
+    for (size_t k = 0; k < std::min<size_t>(3, order.size()); ++k) row(quality.regions[order[k]], clip.regions[order[k]]);
+  }
+  html += "</table>\n";
+  if (!quality.unmeasured_regions.empty()) {
+    std::string names;
+    for (const std::string& name : quality.unmeasured_regions) names += (names.empty() ? "" : ", ") + name;
+    html += "<p class=\"note\">Too flat to enclose a volume, not measured: " + esc(names) + ".</p>\n";
+  }
+  if (!baked.pictures.empty()) {
+    html += "<p class=\"explain\">Each picture: the input skinning, the baked rig, and the rig coloured by its skin's move "
+            "along the surface normal against the input skinning (red out, blue in, white none; colour grows with the square root of the move, full at the "
+            "largest). The same camera for the three panels.</p>\n<div class=\"pictures\">\n";
+    for (const QualityPicture& picture : baked.pictures) {
+      char caption[160];
+      std::snprintf(caption, sizeof(caption), "full colour %.1f mm; out up to %.1f mm, in up to %.1f mm", 1000.0 * picture.scale,
+                    1000.0 * picture.max_out, 1000.0 * picture.max_in);
+      html += "<figure><img alt=\"" + esc(picture.title) + "\" width=\"" + std::to_string(picture.image.width) +
+              "\" height=\"" + std::to_string(picture.image.height) + "\" src=\"" + pngDataUri(picture.image) +
+              "\"><figcaption><b>" + esc(picture.title) + "</b><br>input | rig | move: " + caption + "</figcaption></figure>\n";
+    }
+    html += "</div>\n";
+  }
+  return html + "</section>\n";
+}
 
 }  // namespace
 
@@ -633,6 +700,8 @@ std::string reportHtml(const Report& report) {
           "(light) and RMS (dark) distance between vertices skinned with the packed 0.001 weights and with the "
           "file's WEIGHTS_n, over every key of the clip.</p>\n" +
           deformationChart(report) + "</section>\n</div>\n";
+
+  html += qualitySection(report);
 
   html += "<section id=\"memory\"><h2>Skin data memory</h2>\n<p class=\"explain\">Bytes per vertex of each skin layout "
           "for this character's skinned vertices (pipeline/memory_table.h); the highlighted row is the packed layout "

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "formats/quality_json.h"
+
 namespace rigbake {
 namespace {
 
@@ -80,6 +82,25 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
                       {"bytes_per_vertex", layout.bytes_per_vertex},
                       {"total_bytes", layout.total_bytes}});
   }
+  // Deformation quality: the figures as `bake --stats` writes them, and what each picture shows (the
+  // pictures themselves are in report.html).
+  nlohmann::ordered_json quality;
+  if (report.quality.measured) {
+    quality = nlohmann::ordered_json(deformationQualityJson(report.quality.quality));
+    nlohmann::ordered_json pictures = nlohmann::ordered_json::array();
+    for (const QualityPicture& picture : report.quality.pictures) {
+      pictures.push_back({{"title", picture.title},
+                          {"clip", picture.clip},
+                          {"time_s", number(picture.time)},
+                          {"subject", picture.subject},
+                          {"heatmap_full_scale_mm", number(1000.0 * picture.scale)},
+                          {"max_out_mm", number(1000.0 * picture.max_out)},
+                          {"max_in_mm", number(1000.0 * picture.max_in)}});
+    }
+    quality["pictures"] = pictures;
+  } else {
+    quality = {{"measured", false}, {"reason", report.quality.skip_reason}};
+  }
   return {
       {"report_version", kReportJsonVersion},
       {"tool", {{"name", "rigbake"}, {"version", RIGBAKE_VERSION}}},
@@ -97,6 +118,7 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
         {"muscles", report.muscles},
         {"packed_influences", report.influences}}},
       {"checks", checks},
+      {"deformation_quality", quality},
       {"plots",
        {{"muscle_ratio", ratios},
         {"influence_histogram", report.influence_histogram},

@@ -77,6 +77,15 @@ const std::vector<CheckDefinition>& checkDefinitions() {
        "Largest displacement between skinning with the packed weights and with WEIGHTS_n, over every clip sample"},
       {"JIGGLE_WITHIN_CLAMP", Severity::kError, 1e-6, Comparison::kAtMost, "deg",
        "Largest amount by which a baked jiggle's angle exceeds its cone's half-angle, over every clip sample"},
+      // Deformation quality (docs/deformation-quality.md), on the file's own clips and any --rom clips.
+      {"SKIN_REGION_VOLUME_LOSS", Severity::kError, 1.0, Comparison::kAtMost, "points of volume",
+       "Largest volume a body region loses under the baked rig beyond what the input skinning loses, per clip"},
+      {"SKIN_BODY_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
+       "Largest amount by which the rig's whole-body volume change exceeds the input skinning's, per clip"},
+      {"MUSCLE_BULGE_OUTWARD", Severity::kWarning, -0.0005, Comparison::kAtLeast, "x body height",
+       "Smallest mean move of a muscle's skin along the normal at its most compressed sample (positive: out)"},
+      {"MUSCLE_STRETCH_NO_HOLLOW", Severity::kWarning, -0.001, Comparison::kAtLeast, "x body height",
+       "Smallest mean move of a muscle's skin along the normal at its most stretched sample (negative: a hollow)"},
       {"GLTF_STRUCTURE", Severity::kError, 0.0, Comparison::kAtMost, "issues",
        "Structural problems: accessor counts and types, skins, muscle joint nodes and their animation"},
       {"KHRONOS_VALIDATOR", Severity::kError, 0.0, Comparison::kAtMost, "errors",
@@ -580,6 +589,82 @@ CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const st
   return result;
 }
 
+// Why a deformation-quality check cannot run, or "" when it can.
+static std::string qualitySkip(const ValidationInputs& inputs) {
+  if (!inputs.quality) return inputs.landmarks ? "deformation quality was not measured" : "landmarks did not resolve";
+  if (!inputs.quality->measured) return inputs.quality->skip_reason;
+  return "";
+}
+
+CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("SKIN_REGION_VOLUME_LOSS", config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  if (quality.regions.empty()) return skipped(result, "no body region is measurable on this mesh");
+  Measurement measurement(&result);
+  for (const ClipQuality& clip : quality.clips) {
+    for (size_t r = 0; r < clip.regions.size(); ++r) {
+      const SkinningVolumes& v = clip.regions[r];
+      // Loss beyond the input's own: what the rig loses below min(input change, 0), in points.
+      const double loss = std::max(0.0, 100.0 * (std::min(v.input.change, 0.0) - v.rig.change));
+      measurement.add(loss, clip.clip + "/" + quality.regions[r],
+                      "input skinning " + fixed(100.0 * v.input.change, 2) + " %, dual quaternions " +
+                          fixed(100.0 * v.dual_quaternion.change, 2) + " %, rig " + fixed(100.0 * v.rig.change, 2) +
+                          " % at " + fixed(v.rig.time, 2) + " s");
+    }
+  }
+  measurement.finish(std::to_string(quality.regions.size()) + " regions over " + std::to_string(quality.clips.size()) +
+                     " clips, largest loss beyond the input's " + fixed(result.measured, 2) + " points");
+  return result;
+}
+
+CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("SKIN_BODY_VOLUME", config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  Measurement measurement(&result);
+  for (const ClipQuality& clip : quality.clips) {
+    const SkinningVolumes& v = clip.body;
+    measurement.add(100.0 * (std::abs(v.rig.change) - std::abs(v.input.change)), clip.clip,
+                    "input skinning " + fixed(100.0 * v.input.change, 2) + " %, dual quaternions " +
+                        fixed(100.0 * v.dual_quaternion.change, 2) + " %, rig " + fixed(100.0 * v.rig.change, 2) + " %");
+  }
+  measurement.finish(std::to_string(quality.clips.size()) + " clips, rig against input skinning at most " +
+                     fixed(result.measured, 2) + " points");
+  return result;
+}
+
+static CheckResult checkMuscleMove(const ValidationInputs& inputs, const ValidationConfig& config, const char* code, bool compressed) {
+  CheckResult result = startCheck(code, config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  if (quality.muscles.empty()) return skipped(result, "the file has no RIGBAKE_muscle_rig extension to read muscle lengths from");
+  const double height = bodyHeightOf(inputs);
+  Measurement measurement(&result);
+  int measured = 0;
+  for (const MuscleQuality& muscle : quality.muscles) {
+    const MuscleSkinMove& move = compressed ? muscle.compressed : muscle.stretched;
+    if (!move.measured) continue;
+    ++measured;
+    measurement.add(move.mean / height, muscle.muscle,
+                    "mean " + fixed(1000.0 * move.mean, 2) + " mm (out " + fixed(1000.0 * move.max_out, 2) + ", in " +
+                        fixed(1000.0 * move.max_in, 2) + " mm) at length ratio " + fixed(move.ratio, 3) + ", " +
+                        move.clip + " " + fixed(move.time, 2) + " s");
+  }
+  if (!result.has_measured) return skipped(result, compressed ? "no muscle is compressed in any clip" : "no muscle is stretched in any clip");
+  measurement.finish(std::to_string(measured) + " muscles, smallest mean move " +
+                     fixed(1000.0 * result.measured * height, 2) + " mm");
+  return result;
+}
+
+CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config) {
+  return checkMuscleMove(inputs, config, "MUSCLE_BULGE_OUTWARD", true);
+}
+
+CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config) {
+  return checkMuscleMove(inputs, config, "MUSCLE_STRETCH_NO_HOLLOW", false);
+}
+
 CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("GLTF_STRUCTURE", config);
   std::vector<FileIssue> issues = inputs.file->structure;
@@ -785,6 +870,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.influence_histogram = influenceHistogram(file);
   report.memory = skinMemoryTable(report.vertices);
   report.jiggles = file.jiggles;
+  if (inputs.quality) report.quality = *inputs.quality;
 
   report.checks.push_back(checkLandmarksResolved(inputs, config));
   report.checks.push_back(checkLocatorSymmetry(inputs, config));
@@ -796,6 +882,10 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkInfluenceCount(inputs, config));
   report.checks.push_back(checkPackedDeformationError(inputs, report.deformation, config));
   report.checks.push_back(checkJiggleWithinClamp(inputs, config));
+  report.checks.push_back(checkRegionVolumeLoss(inputs, config));
+  report.checks.push_back(checkBodyVolume(inputs, config));
+  report.checks.push_back(checkMuscleBulgeOutward(inputs, config));
+  report.checks.push_back(checkMuscleStretchNoHollow(inputs, config));
   report.checks.push_back(checkGltfStructure(inputs, config));
   report.checks.push_back(checkKhronosValidator(inputs, config));
   assert(report.checks.size() == checkDefinitions().size());

@@ -15,9 +15,11 @@
 #include "anatomy/character.h"
 #include "anatomy/landmarks.h"
 #include "anatomy/muscle_set.h"
+#include "pipeline/deformation_quality.h"
 #include "pipeline/memory_table.h"
 #include "pipeline/pack_influences.h"
 #include "pipeline/pose.h"
+#include "pipeline/render.h"
 #include "runtime/muscle_rig.h"
 
 namespace rigbake {
@@ -98,6 +100,7 @@ struct FileMuscleNode {
   std::string role;    // base, tip, driver, skinned
   std::string origin_joint;
   std::string insertion_joint;
+  std::string carrier_joint;  // "" when the file does not say
   double compression = 0.0;
   double stretch = 0.0;
 };
@@ -212,6 +215,26 @@ struct ClipDeformation {
   double rms_displacement = 0.0;
 };
 
+// Deformation quality of the file (pipeline/baked_quality.h). A picture: the input skinning and the
+// baked rig side by side at one sample, framed on one part of the body.
+struct QualityPicture {
+  std::string title;    // what is shown: a clip's worst region or a muscle at its peak compression
+  std::string clip;
+  double time = 0.0;
+  std::string subject;  // the region or muscle framed
+  double scale = 0.0;   // scene units at full heatmap colour
+  double max_out = 0.0, max_in = 0.0;  // displacement of the rig along the input's normal, scene units
+  // One image: input skinning | baked rig | heatmap of the rig's displacement (red out, blue in).
+  RgbImage image;
+};
+
+struct BakedQuality {
+  bool measured = false;
+  std::string skip_reason;  // when not measured
+  DeformationQuality quality;
+  std::vector<QualityPicture> pictures;
+};
+
 struct Report {
   std::string character;  // file name without directories
   int joints = 0;
@@ -225,6 +248,7 @@ struct Report {
   std::vector<ClipDeformation> deformation;
   std::vector<SkinLayoutSize> memory;
   std::vector<ClipJiggles> jiggles;  // empty when the bake had no --jiggle
+  BakedQuality quality;              // measured = false without muscle joints or landmarks
 
   // True when every check at error severity passed or was skipped.
   bool passed() const;
@@ -239,6 +263,7 @@ struct ValidationInputs {
   std::string landmark_problem;            // the resolver's message when they did not
   const MuscleSet* muscles = nullptr;      // nullptr without --muscles
   const BakedFileData* file = nullptr;
+  const BakedQuality* quality = nullptr;  // nullptr: not measured (the checks say why)
   ExternalValidation khronos;
 };
 
@@ -257,6 +282,10 @@ CheckResult checkJointIndexInRange(const ValidationInputs& inputs, const Validat
 CheckResult checkInfluenceCount(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const std::vector<ClipDeformation>& per_clip,
                                         const ValidationConfig& config);
+CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkKhronosValidator(const ValidationInputs& inputs, const ValidationConfig& config);
 

@@ -1,0 +1,386 @@
+// Deformation quality measured from a baked file (see the header): fold the muscles' weight back onto
+// their carriers for the input skinning, evaluate the rig as an engine does for the baked one, and hand
+// both to measureDeformationQuality(); then draw each clip's worst region and each muscle kind at its
+// peak compression.
+#include "pipeline/baked_quality.h"
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <map>
+
+#include "pipeline/influences.h"
+#include "pipeline/muscle_joint.h"
+#include "pipeline/pose.h"
+#include "pipeline/skin_volume.h"
+#include "pipeline/skinning.h"
+
+namespace rigbake {
+namespace {
+
+struct FileMuscle {
+  std::string name;
+  int joint = -1;    // the skinned node's skeleton joint
+  int carrier = -1;  // the joint its weight came from
+  int rig_index = -1;  // in file.rig.rig.muscles, -1 when the file has no usable extension
+};
+
+// Relabels every slot through `fold` and merges slots that then name the same joint into the first.
+InfluenceSet foldInfluences(const InfluenceSet& set, const std::vector<int>& fold) {
+  InfluenceSet out = set;
+  const int slots = set.slots_per_vertex;
+  for (int v = 0; v < set.vertexCount(); ++v) {
+    int* joints = &out.joints[static_cast<size_t>(v) * slots];
+    double* weights = &out.weights[static_cast<size_t>(v) * slots];
+    for (int k = 0; k < slots; ++k) joints[k] = fold[joints[k]];
+    for (int k = 1; k < slots; ++k) {
+      if (weights[k] == 0.0) continue;
+      for (int first = 0; first < k; ++first) {
+        if (joints[first] != joints[k] || weights[first] == 0.0) continue;
+        weights[first] += weights[k];
+        weights[k] = 0.0;
+        break;
+      }
+    }
+  }
+  return out;
+}
+
+std::string formatSeconds(double t) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f s", t);
+  return text;
+}
+
+// The three panels side by side.
+RgbImage besideEachOther(const std::vector<RgbImage>& panels) {
+  RgbImage all;
+  all.height = panels.front().height;
+  for (const RgbImage& panel : panels) all.width += panel.width;
+  all.pixels.assign(static_cast<size_t>(all.width) * all.height * 3, 255);
+  int left = 0;
+  for (const RgbImage& panel : panels) {
+    for (int y = 0; y < panel.height; ++y)
+      std::copy_n(&panel.pixels[static_cast<size_t>(y) * panel.width * 3], panel.width * 3,
+                  &all.pixels[(static_cast<size_t>(y) * all.width + left) * 3]);
+    left += panel.width;
+  }
+  return all;
+}
+
+// A muscle is pictured when some clip shortens it at least this much (length ratio): a muscle the clips
+// barely compress shows nothing.
+constexpr double kPictureMinCompression = 0.98;
+
+}  // namespace
+
+BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& landmarks, const RegionPreset& preset,
+                                 const BakedFileData& file, const BakedQualityOptions& options) {
+  BakedQuality out;
+  const Skeleton& skeleton = character.skeleton;
+  const int joint_count = skeleton.size();
+  const bool with_rig = file.rig.present && file.rig.problems.empty() && !file.rig.rig.muscles.empty();
+
+  // The skinned muscle joints and their carriers.
+  std::vector<FileMuscle> muscles;
+  if (with_rig) {
+    for (size_t m = 0; m < file.rig.skinned_joint.size(); ++m)
+      muscles.push_back({file.rig.names[m], file.rig.skinned_joint[m], file.rig.rig.muscles[m].carrier_joint, static_cast<int>(m)});
+  } else {
+    for (const FileMuscleNode& node : file.muscle_nodes) {
+      if (node.role != "skinned") continue;
+      const int carrier = node.carrier_joint.empty() ? -1 : skeleton.find(node.carrier_joint);
+      if (carrier < 0) {
+        out.skip_reason = "muscle node '" + node.name + "' does not name its carrier joint (a bake older than the carrier weights)";
+        return out;
+      }
+      muscles.push_back({node.muscle, skeleton.find(node.name), carrier, -1});
+    }
+  }
+  if (muscles.empty()) {
+    out.skip_reason = "the file has no skinned muscle joints";
+    return out;
+  }
+  for (const FileMuscle& muscle : muscles) {
+    if (muscle.joint < 0 || muscle.carrier < 0 || muscle.carrier >= joint_count) {
+      out.skip_reason = "muscle '" + muscle.name + "' has no skinned joint or carrier in the skeleton";
+      return out;
+    }
+  }
+  std::vector<int> fold(joint_count);
+  for (int j = 0; j < joint_count; ++j) fold[j] = j;
+  for (const FileMuscle& muscle : muscles) fold[muscle.joint] = muscle.carrier;
+  // With the extension, muscle m is joint (joint_count + m) of the rig's weights, as the bake measures
+  // it, so that the per-muscle figures can find its skin.
+  const int measured_muscles = with_rig ? static_cast<int>(muscles.size()) : 0;
+  std::vector<int> rig_label(joint_count);
+  for (int j = 0; j < joint_count; ++j) rig_label[j] = j;
+  for (int m = 0; m < measured_muscles; ++m) rig_label[muscles[m].joint] = joint_count + m;
+
+  // The character as the input skinning sees it: regions are cut on these weights.
+  Character folded = character;
+  std::vector<MeasuredPart> parts;
+  for (size_t p = 0; p < character.meshes.size(); ++p) {
+    const MeshPart& mesh = character.meshes[p];
+    // Every skinned part with positions, in order: BodyRegion::triangles is indexed the same way.
+    if (!mesh.skinned || mesh.positions.empty()) continue;
+    const InfluenceSet file_weights = influencesFromMesh(mesh);
+    if (!checkInfluences(file_weights, joint_count).empty()) {
+      out.skip_reason = "mesh '" + mesh.name + "' has invalid skin weights (WEIGHTS_* checks)";
+      return out;
+    }
+    MeasuredPart part;
+    part.mesh_part = static_cast<int>(p);
+    part.input = normalizedInfluences(foldInfluences(file_weights, fold));
+    part.rig = normalizedInfluences(foldInfluences(file_weights, rig_label));
+    folded.meshes[p].joints = part.input.joints;
+    folded.meshes[p].weights = part.input.weights;
+    folded.meshes[p].influences_per_vertex = part.input.slots_per_vertex;
+    parts.push_back(std::move(part));
+  }
+  if (parts.empty()) {
+    out.skip_reason = "no skinned mesh with valid weights and triangles";
+    return out;
+  }
+  const std::vector<BodyRegion> regions = resolveBodyRegions(folded, landmarks, preset);
+
+  MuscleSet muscle_set;
+  muscle_set.body_height = landmarks.body.height;
+  for (int m = 0; m < measured_muscles; ++m) {
+    MusclePart part;
+    part.name = muscles[m].name;
+    const runtime::RigMuscle<double>& rig = file.rig.rig.muscles[muscles[m].rig_index];
+    part.compression = rig.compression;
+    part.stretch = rig.stretch;
+    muscle_set.parts.push_back(std::move(part));
+  }
+
+  // Skin matrices of the skeleton, then the muscles' skinned joints again at joint_count + m.
+  auto frameAt = [&](const Pose& pose) {
+    std::vector<Eigen::Affine3d> frame = bakedSkinMatrices(character, file, pose);
+    for (int m = 0; m < measured_muscles; ++m) frame.push_back(frame[muscles[m].joint]);
+    return frame;
+  };
+  std::vector<std::vector<SkinFrame>> frames(std::max<size_t>(character.clips.size(), 1));
+  std::vector<MeasuredClip> clips;
+  auto addClip = [&](const Clip* clip, size_t c) {
+    MeasuredClip measured;
+    measured.name = clip ? clip->name : "(rest pose)";
+    measured.times = clip ? sampleTimes(*clip, 0.0) : std::vector<double>{};
+    if (measured.times.empty()) measured.times.push_back(0.0);
+    for (double t : measured.times) {
+      const Pose pose = clip ? sampleClip(skeleton, *clip, t) : restPose(skeleton);
+      frames[c].push_back(frameAt(pose));
+      std::vector<double> ratio(measured_muscles, 1.0);
+      if (measured_muscles > 0) {
+        const RigEvaluation evaluation = evaluateRig(file.rig.rig, pose, false);
+        for (int m = 0; m < measured_muscles; ++m) ratio[m] = evaluation.drivers[muscles[m].rig_index].clamped_ratio;
+      }
+      measured.ratio.push_back(std::move(ratio));
+    }
+    measured.frames = &frames[c];
+    clips.push_back(std::move(measured));
+  };
+  for (size_t c = 0; c < character.clips.size(); ++c) addClip(&character.clips[c], c);
+  if (character.clips.empty()) addClip(nullptr, 0);
+
+  out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips);
+  out.measured = true;
+  if (!options.pictures) return out;
+
+  // ---- Pictures ----
+  struct PicturePart {
+    const MeshPart* mesh;
+    const MeasuredPart* weights;
+    VolumeSurface surface;
+    std::vector<int> region_of_triangle;  // index into `regions`, -1 for none
+  };
+  const double tolerance = 1e-6 * std::max(landmarks.body.height, 1e-3);
+  std::vector<PicturePart> drawn;
+  for (const MeasuredPart& part : parts) {
+    PicturePart picture{&character.meshes[part.mesh_part], &part, buildVolumeSurface(character.meshes[part.mesh_part], tolerance), {}};
+    drawn.push_back(std::move(picture));
+  }
+  auto regionIndex = [&](const std::string& name) {
+    for (size_t r = 0; r < regions.size(); ++r)
+      if (regions[r].name == name) return static_cast<int>(r);
+    return -1;
+  };
+  auto sampleIndex = [&](size_t c, double time) {
+    const std::vector<double>& times = clips[c].times;
+    size_t best = 0;
+    for (size_t t = 1; t < times.size(); ++t)
+      if (std::abs(times[t] - time) < std::abs(times[best] - time)) best = t;
+    return best;
+  };
+  // Draws one sample, framed on the welded vertices `subject(part, welded vertex)` picks.
+  auto draw = [&](const std::string& title, size_t c, double time, const std::string& subject_name,
+                  const std::function<bool(size_t, int)>& subject) {
+    const SkinFrame& frame = frames[c][sampleIndex(c, time)];
+    std::vector<std::vector<Eigen::Vector3d>> input(drawn.size()), rig(drawn.size()), normals(drawn.size());
+    std::vector<std::vector<double>> along(drawn.size());
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), facing = Eigen::Vector3d::Zero();
+    int count = 0;
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      const PicturePart& part = drawn[p];
+      input[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame));
+      rig[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame));
+      normals[p] = vertexNormals(part.surface.whole, input[p]);
+      along[p].resize(input[p].size());
+      for (size_t w = 0; w < input[p].size(); ++w) {
+        along[p][w] = (rig[p][w] - input[p][w]).dot(normals[p][w]);
+        if (!subject(p, static_cast<int>(w))) continue;
+        centre += rig[p][w];
+        facing += normals[p][w];
+        ++count;
+      }
+    }
+    if (count == 0) return;
+    centre /= count;
+    QualityPicture picture;
+    picture.title = title;
+    picture.clip = clips[c].name;
+    picture.time = clips[c].times[sampleIndex(c, time)];
+    picture.subject = subject_name;
+    double radius = 0.0;
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      for (size_t w = 0; w < rig[p].size(); ++w) {
+        if (!subject(p, static_cast<int>(w))) continue;
+        radius = std::max(radius, (rig[p][w] - centre).norm());
+        picture.max_out = std::max(picture.max_out, along[p][w]);
+        picture.max_in = std::max(picture.max_in, -along[p][w]);
+      }
+    }
+    // Seen across the subject's long axis (a limb from the side, not end on). When the skin around it
+    // lies in a plane (a bent elbow, a raised arm against the torso), from that plane's normal, so the
+    // bend shows; otherwise from where the subject's skin faces (a muscle's patch), else from the front.
+    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), around = Eigen::Matrix3d::Zero();
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      for (size_t w = 0; w < rig[p].size(); ++w) {
+        const Eigen::Vector3d d = rig[p][w] - centre;
+        if (subject(p, static_cast<int>(w))) spread += d * d.transpose();
+        if (d.norm() <= 1.5 * radius) around += d * d.transpose();
+      }
+    }
+    const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvectors().col(2);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> plane(around);
+    auto across = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(d - d.dot(axis) * axis); };
+    Eigen::Vector3d view = Eigen::Vector3d::Zero();
+    if (plane.eigenvalues()[1] > 3.0 * plane.eigenvalues()[0]) {
+      view = plane.eigenvectors().col(0);
+      const Eigen::Vector3d toward = facing.norm() > 0.3 * count ? facing : landmarks.body.forward;
+      if (view.dot(toward) < 0.0) view = -view;
+    } else if (facing.norm() > 0.3 * count) {
+      view = across(facing);
+    }
+    if (view.norm() < 1e-6) view = across(landmarks.body.forward);
+    if (view.norm() < 1e-6) view = across(landmarks.body.lateral);
+    view.normalize();
+    Eigen::Vector3d up = landmarks.body.up - landmarks.body.up.dot(view) * view;
+    if (up.norm() < 1e-6) up = axis - axis.dot(view) * view;
+    Camera camera;
+    camera.centre = centre;
+    camera.forward = -view;
+    camera.up = up.normalized();
+    camera.half_height = std::max(1.3 * radius, 0.05 * landmarks.body.height);
+    picture.scale = std::max({picture.max_out, picture.max_in, 1e-4 * landmarks.body.height});
+    std::vector<std::vector<Eigen::Vector3f>> colours(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p)
+      // Square root: a move a tenth of the largest still shows a third of the colour.
+      for (double a : along[p]) colours[p].push_back(divergingColour(std::copysign(std::sqrt(std::abs(a) / picture.scale), a)));
+    std::vector<RenderSurface> plain_input, plain_rig, heat;
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      plain_input.push_back({&input[p], &drawn[p].surface.whole.triangles, nullptr});
+      plain_rig.push_back({&rig[p], &drawn[p].surface.whole.triangles, nullptr});
+      heat.push_back({&rig[p], &drawn[p].surface.whole.triangles, &colours[p]});
+    }
+    const int size = options.picture_size;
+    picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
+                                     renderSurfaces(heat, camera, size, size)});
+    out.pictures.push_back(std::move(picture));
+  };
+
+  // Welded vertices of each part on a region's triangles.
+  auto regionVertices = [&](int r) {
+    std::vector<std::vector<char>> on(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      on[p].assign(drawn[p].surface.weldedCount(), 0);
+      const MeshPart& mesh = *drawn[p].mesh;
+      for (int triangle : regions[r].triangles[p])
+        for (int corner : mesh.triangles[triangle]) on[p][drawn[p].surface.weld_of_vertex[corner]] = 1;
+    }
+    return on;
+  };
+  // Each clip: the region whose rig change departs most from the input's, at the rig's extreme.
+  const DeformationQuality& quality = out.quality;
+  for (size_t c = 0; c < quality.clips.size(); ++c) {
+    const ClipQuality& figures = quality.clips[c];
+    int worst = -1;
+    double worst_gap = -1.0;
+    for (size_t r = 0; r < figures.regions.size(); ++r) {
+      const double gap = std::abs(figures.regions[r].rig.change - figures.regions[r].input.change);
+      if (gap > worst_gap) {
+        worst_gap = gap;
+        worst = static_cast<int>(r);
+      }
+    }
+    if (worst < 0) continue;
+    const int r = regionIndex(quality.regions[worst]);
+    if (r < 0) continue;
+    const std::vector<std::vector<char>> on = regionVertices(r);
+    const double time = figures.regions[worst].rig.time;
+    draw(figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], c, time, quality.regions[worst],
+         [&](size_t p, int w) { return on[p][w] != 0; });
+  }
+  // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side.
+  std::map<std::string, int> kind_pick;
+  std::vector<std::string> kind_order;
+  auto kindOf = [](const std::string& name) {
+    for (const char* side : {"Left", "Right"})
+      if (name.rfind(side, 0) == 0) return name.substr(std::string(side).size());
+    return name;
+  };
+  for (size_t m = 0; m < quality.muscles.size(); ++m) {
+    const MuscleSkinMove& move = quality.muscles[m].compressed;
+    if (!move.measured || move.ratio > kPictureMinCompression) continue;
+    const std::string kind = kindOf(quality.muscles[m].muscle);
+    auto it = kind_pick.find(kind);
+    if (it == kind_pick.end()) {
+      kind_pick[kind] = static_cast<int>(m);
+      kind_order.push_back(kind);
+    } else if (move.ratio < quality.muscles[it->second].compressed.ratio) {
+      it->second = static_cast<int>(m);
+    }
+  }
+  for (const std::string& kind : kind_order) {
+    const int m = kind_pick[kind];
+    const MuscleSkinMove& move = quality.muscles[m].compressed;
+    size_t c = 0;
+    while (c < clips.size() && clips[c].name != move.clip) ++c;
+    if (c == clips.size()) continue;
+    // The muscle's skin: welded vertices with at least kMuscleSkinWeight of its skinned joint.
+    std::vector<std::vector<char>> on(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      const InfluenceSet& rig = drawn[p].weights->rig;
+      on[p].assign(drawn[p].surface.weldedCount(), 0);
+      for (int w = 0; w < drawn[p].surface.weldedCount(); ++w) {
+        const int v = drawn[p].surface.vertex_of_weld[w];
+        double weight = 0.0;
+        for (int k = 0; k < rig.slots_per_vertex; ++k)
+          if (rig.joints[v * rig.slots_per_vertex + k] == joint_count + m) weight += rig.weights[v * rig.slots_per_vertex + k];
+        on[p][w] = weight >= kMuscleSkinWeight;
+      }
+    }
+    char ratio[32];
+    std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);
+    draw(quality.muscles[m].muscle + " at its most compressed (length ratio " + ratio + "), " + move.clip + " at " +
+             formatSeconds(move.time),
+         c, move.time, quality.muscles[m].muscle, [&](size_t p, int w) { return on[p][w] != 0; });
+  }
+  return out;
+}
+
+}  // namespace rigbake

@@ -1,0 +1,226 @@
+// Deformation quality (docs/deformation-quality.md): the volume figures of `bake --stats` and
+// `validate`, measured on the built-in mannequin and the shared characters, and what the fitted
+// muscle rig achieves against the input's own skinning and dual-quaternion skinning.
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "cli_support.h"
+
+using namespace rigbake::test;
+
+namespace {
+
+struct Baked {
+  nlohmann::json stats;
+  std::string glb, muscles;
+};
+
+// place + bake with --stats, as a user would; `preset` is a muscle preset name.
+Baked placeAndBake(const TempDir& dir, const std::string& input, const std::string& name, const std::string& preset,
+                   const std::string& extra = "") {
+  Baked baked;
+  baked.muscles = dir / (name + ".json");
+  baked.glb = dir / (name + ".glb");
+  CliResult placed = runCli("place " + input + " --preset " + preset + " -o " + baked.muscles);
+  INFO(placed.err);
+  REQUIRE(placed.exit_code == 0);
+  CliResult r = runCli("bake " + input + " --muscles " + baked.muscles + " --influences 10 -o " + baked.glb + " --stats " +
+                       (dir / (name + ".stats.json")) + " " + extra);
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  baked.stats = nlohmann::json::parse(slurp(dir / (name + ".stats.json")));
+  return baked;
+}
+
+double percent(const nlohmann::json& volumes, const char* skinning) { return volumes[skinning]["change_percent"].get<double>(); }
+
+// The most any region loses under the rig beyond what the input skinning loses, in points.
+double worstRegionLoss(const nlohmann::json& quality, std::string* where) {
+  double worst = 0.0;
+  for (const auto& [region, figures] : quality["regions"].items()) {
+    for (const auto& [clip, volumes] : figures["per_clip"].items()) {
+      const double loss = std::min(percent(volumes, "input"), 0.0) - percent(volumes, "rig");
+      if (loss > worst) {
+        worst = loss;
+        *where = region + " in " + clip;
+      }
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("deformation quality: the mannequin's figures, input skinning and dual quaternions as measured in issue 11") {
+  TempDir dir;
+  const Baked baked = placeAndBake(dir, sampleGlbPathForCli(), "mannequin", "gow_biped", "--gltf-weights unorm16");
+  const nlohmann::json& body = baked.stats["deformation_quality"]["body"]["per_clip"];
+  // Closed surface, signed tetrahedra, largest |V(t)/V(bind) - 1| over every key of the clip.
+  CHECK(percent(body["ElbowFlexion"], "input") == Approx(-0.74).margin(0.005));
+  CHECK(percent(body["ElbowFlexion"], "dual_quaternion") == Approx(-0.06).margin(0.005));
+  CHECK(percent(body["ArmRaise"], "input") == Approx(0.78).margin(0.005));
+  CHECK(percent(body["ArmRaise"], "dual_quaternion") == Approx(1.03).margin(0.005));
+  CHECK(percent(body["ForearmTwist"], "input") == Approx(-0.36).margin(0.005));
+  CHECK(percent(body["ForearmTwist"], "dual_quaternion") == Approx(-0.02).margin(0.005));
+}
+
+TEST_CASE("deformation quality: on the mannequin the fitted rig keeps more volume than plain skinning, and no region loses") {
+  TempDir dir;
+  const Baked baked = placeAndBake(dir, sampleGlbPathForCli(), "mannequin", "gow_biped");
+  const nlohmann::json& quality = baked.stats["deformation_quality"];
+  const nlohmann::json& body = quality["body"]["per_clip"];
+  for (const char* clip : {"ElbowFlexion", "ForearmTwist"}) {
+    INFO(clip << ": input " << percent(body[clip], "input") << " %, rig " << percent(body[clip], "rig") << " %");
+    CHECK(std::abs(percent(body[clip], "rig")) <= 0.5 * std::abs(percent(body[clip], "input")));
+  }
+  // ElbowFlexion: from -0.74 % to within about a tenth of a percent (dual quaternions: 0.06 %).
+  CHECK(std::abs(percent(body["ElbowFlexion"], "rig")) <= 0.1);
+  // ArmRaise: the rig does not gain more than the input skinning does (the half target is not met:
+  // docs/deformation-quality.md says why).
+  CHECK(std::abs(percent(body["ArmRaise"], "rig")) <= std::abs(percent(body["ArmRaise"], "input")) + 0.01);
+  std::string where;
+  const double loss = worstRegionLoss(quality, &where);
+  INFO("worst region loss beyond the input's: " << loss << " points, " << where);
+  CHECK(loss <= 1.0);
+  CHECK(quality["regions"].size() >= 16);  // shoulders, arms, elbows, forearms, chest, back, legs
+}
+
+TEST_CASE("deformation quality: the compressed biceps bulges out by the order of its preset bulge, stretched muscles do not hollow") {
+  TempDir dir;
+  const Baked baked = placeAndBake(dir, sampleGlbPathForCli(), "mannequin", "gow_biped");
+  const nlohmann::json& muscles = baked.stats["deformation_quality"]["muscles"];
+  const double height_mm = 1800.0;
+  for (const char* side : {"Left", "Right"}) {
+    const nlohmann::json& biceps = muscles[std::string(side) + "Bicep"]["compressed"];
+    REQUIRE(biceps.is_object());
+    INFO(side << " biceps at " << biceps["clip"] << " " << biceps["time_s"] << " s: mean " << biceps["mean_mm"] << " mm, out "
+              << biceps["max_out_mm"] << " mm");
+    CHECK(biceps["clip"] == "ElbowFlexion");
+    // gow_biped's biceps bulge is 15 mm; the skin it drives moves out, up to the same order.
+    CHECK(biceps["mean_mm"].get<double>() > 1.0);
+    CHECK(biceps["max_out_mm"].get<double>() > 5.0);
+    CHECK(biceps["max_out_mm"].get<double>() < 30.0);
+  }
+  // The left and right twins move the skin alike (the sample is an exact mirror image).
+  CHECK(muscles["LeftBicep"]["compressed"]["mean_mm"].get<double>() ==
+        Approx(muscles["RightBicep"]["compressed"]["mean_mm"].get<double>()).margin(0.05));
+  for (const auto& [name, figures] : muscles.items()) {
+    INFO(name);
+    if (figures["stretched"].is_object()) CHECK(figures["stretched"]["mean_mm"].get<double>() >= -0.001 * height_mm);
+    if (figures["compressed"].is_object()) CHECK(figures["compressed"]["mean_mm"].get<double>() >= -0.0005 * height_mm);
+  }
+}
+
+TEST_CASE("deformation quality: with gow_fullbody no region of a shared character loses more than 1 point beyond its skinning") {
+  const std::set<std::string> chosen(sharedAssetNames().begin(), sharedAssetNames().end());
+  for (const char* asset : {"CesiumMan.glb", "Quaternius_Cyberpunk_Character.glb", "RobotExpressive.glb"}) {
+    if (!chosen.count(asset)) continue;
+    const std::string input = requireAsset(asset);
+    if (input.empty()) continue;
+    TempDir dir;
+    const Baked baked = placeAndBake(dir, input, "character", "gow_fullbody");
+    const nlohmann::json& quality = baked.stats["deformation_quality"];
+    std::string where;
+    const double loss = worstRegionLoss(quality, &where);
+    INFO(asset << ": worst region loss beyond the input's " << loss << " points, " << where);
+    CHECK(loss <= 1.0);
+    CHECK(baked.stats["muscle_joints"].get<int>() >= 56);  // the legs and abdominals are placed too
+    // The whole body keeps more volume than with the input skinning on every clip.
+    for (const auto& [clip, volumes] : quality["body"]["per_clip"].items()) {
+      INFO(clip << ": input " << percent(volumes, "input") << " %, rig " << percent(volumes, "rig") << " %");
+      CHECK(std::abs(percent(volumes, "rig")) <= std::abs(percent(volumes, "input")) + 0.05);
+    }
+  }
+}
+
+TEST_CASE("validate: deformation figures, checks and pictures from the baked file alone, byte-identical twice") {
+  TempDir dir;
+  const Baked baked = placeAndBake(dir, sampleGlbPathForCli(), "mannequin", "gow_biped");
+  CliResult first = runCli("validate " + baked.glb + " --muscles " + baked.muscles + " --report " + (dir / "report1"));
+  INFO(first.err);
+  REQUIRE(first.exit_code == 0);
+  CliResult second = runCli("validate " + baked.glb + " --muscles " + baked.muscles + " --report " + (dir / "report2"));
+  REQUIRE(second.exit_code == 0);
+  const std::string html = slurp(dir / "report1/report.html");
+  CHECK(html == slurp(dir / "report2/report.html"));
+  nlohmann::json report = nlohmann::json::parse(slurp(dir / "report1/report.json"));
+  const nlohmann::json& quality = report["deformation_quality"];
+  REQUIRE(quality.contains("body"));
+  // The file alone gives the bake's figures up to its pruning and rounding (the input skinning here is
+  // the written weights with the muscles' weight returned to their carriers).
+  for (const char* clip : {"ElbowFlexion", "ArmRaise", "ForearmTwist"}) {
+    INFO(clip);
+    CHECK(percent(quality["body"]["per_clip"][clip], "input") ==
+          Approx(percent(baked.stats["deformation_quality"]["body"]["per_clip"][clip], "input")).margin(0.02));
+    CHECK(percent(quality["body"]["per_clip"][clip], "rig") ==
+          Approx(percent(baked.stats["deformation_quality"]["body"]["per_clip"][clip], "rig")).margin(0.02));
+  }
+  std::map<std::string, std::string> status;
+  for (const auto& check : report["checks"]) status[check["code"]] = check["status"];
+  CHECK(status["SKIN_REGION_VOLUME_LOSS"] == "pass");
+  CHECK(status["MUSCLE_BULGE_OUTWARD"] == "pass");
+  CHECK(status["MUSCLE_STRETCH_NO_HOLLOW"] == "pass");
+  // One picture per clip and per muscle kind the clips compress; each a PNG in the page.
+  const size_t pictures = quality["pictures"].size();
+  CHECK(pictures >= 3 + 8);
+  size_t images = 0;
+  for (size_t at = html.find("src=\"data:image/png;base64,"); at != std::string::npos; at = html.find("src=\"data:image/png;base64,", at + 1))
+    ++images;
+  CHECK(images == pictures);
+  bool biceps = false;
+  for (const auto& picture : quality["pictures"]) {
+    if (picture["subject"].get<std::string>().find("Bicep") == std::string::npos) continue;
+    biceps = true;
+    CHECK(picture["clip"] == "ElbowFlexion");
+    CHECK(picture["max_out_mm"].get<double>() > 5.0);
+  }
+  CHECK(biceps);
+}
+
+TEST_CASE("validate: a rig that pulls a region in fails SKIN_REGION_VOLUME_LOSS, naming the region and clip") {
+  // A hand-made response that deflates every muscle by half when compressed: the check must catch it.
+  TempDir dir;
+  CliResult placed = runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "muscles.json"));
+  REQUIRE(placed.exit_code == 0);
+  nlohmann::json muscles = nlohmann::json::parse(slurp(dir / "muscles.json"));
+  int edited = 0;
+  std::function<void(nlohmann::json&)> deflate = [&](nlohmann::json& node) {
+    if (node.is_object()) {
+      if (node.contains("response") && node["response"].contains("ratio")) {
+        for (auto& key : node["response"]["ratio"]) {
+          if (key["at"].get<double>() < 1.0) {
+            key["scale"] = 0.5;
+            key["bulge"] = {0.0, 0.0};
+            ++edited;
+          }
+        }
+      }
+      for (auto& [name, child] : node.items()) deflate(child);
+    } else if (node.is_array()) {
+      for (auto& child : node) deflate(child);
+    }
+  };
+  deflate(muscles);
+  REQUIRE(edited > 0);
+  std::ofstream(dir / "deflated.json") << muscles.dump(2);
+  CliResult r = runCli("bake " + sampleGlbPathForCli() + " --muscles " + (dir / "deflated.json") +
+                       " --response keep --influences 10 -o " + (dir / "baked.glb"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CliResult v = runCli("validate " + (dir / "baked.glb") + " --report " + (dir / "report") + " --no-pictures");
+  INFO(v.err);
+  CHECK(v.exit_code == 1);
+  CHECK(v.err.find("SKIN_REGION_VOLUME_LOSS ") != std::string::npos);
+  nlohmann::json report = nlohmann::json::parse(slurp(dir / "report/report.json"));
+  CHECK(report["deformation_quality"]["pictures"].empty());
+  for (const auto& check : report["checks"]) {
+    if (check["code"] != "SKIN_REGION_VOLUME_LOSS") continue;
+    CHECK(check["status"] == "fail");
+    CHECK(check["measured"].get<double>() > 1.0);
+    CHECK(check["location"].get<std::string>().find('/') != std::string::npos);  // clip/region
+  }
+}
