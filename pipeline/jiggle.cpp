@@ -128,7 +128,7 @@ JiggleTrack simulate(const JiggleSetup& setup, const std::vector<double>& sample
   rig.jiggles = {jiggleRuntimeSettings(setup)};
   assert(runtime::jiggleRigProblem(rig)[0] == '\0');
   const runtime::JiggleSettings<double>& settings = rig.jiggles.front();
-  std::vector<runtime::JiggleState<double>> state(1);
+  std::vector<runtime::JiggleState> state(1);
 
   // Hits per step: a hit at time t acts at the first step at or after t.
   std::vector<std::vector<const HitImpulse*>> kicks(grid.size());

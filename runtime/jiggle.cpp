@@ -407,17 +407,16 @@ JiggleOutput<Real> evaluate(const JiggleSettings<Real>& s, V3<Real> local_offset
 }
 
 // The distance limit and the cone at a step whose joint rotation is `rotation`: the offset is moved
-// back and the part of the velocity (relative to the target) going out through the limit is dropped,
-// an inelastic contact. Returns the offset in the joint's frame.
+// back and the part of the velocity relative to the target going out through the limit is dropped, an
+// inelastic contact. Returns the offset in the joint's frame.
 template <typename Real>
-V3<Real> constrain(const JiggleSettings<Real>& s, Q4<Real> rotation, V3<Real> target_velocity, V3<Real>* offset,
-                   V3<Real>* velocity) {
+V3<Real> constrain(const JiggleSettings<Real>& s, Q4<Real> rotation, V3<Real>* offset, V3<Real>* relative_velocity) {
   const Real distance = norm3(*offset);
   if (distance > s.max_offset) {
     const V3<Real> outward = divided(*offset, distance);
     *offset = scaled(s.max_offset, outward);
-    const Real away = dot3(sub(*velocity, target_velocity), outward);
-    if (away > Real(0)) *velocity = sub(*velocity, scaled(away, outward));
+    const Real away = dot3(*relative_velocity, outward);
+    if (away > Real(0)) *relative_velocity = sub(*relative_velocity, scaled(away, outward));
   }
   V3<Real> local = rotate(conjugateQ(rotation), *offset);
   const V3<Real> rest = load3(s.rest_point);
@@ -430,54 +429,104 @@ V3<Real> constrain(const JiggleSettings<Real>& s, Q4<Real> rotation, V3<Real> ta
     const V3<Real> normal = rotate(rotation, coneNormal(s, coneCoords(s, clamped)));
     if (norm3(normal) > Real(0)) {
       const V3<Real> outward = unit3(normal);
-      const Real away = dot3(sub(*velocity, target_velocity), outward);
-      if (away > Real(0)) *velocity = sub(*velocity, scaled(away, outward));
+      const Real away = dot3(*relative_velocity, outward);
+      if (away > Real(0)) *relative_velocity = sub(*relative_velocity, scaled(away, outward));
     }
   }
   return local;
 }
 
-// One step of kJiggleStepSeconds to a joint at `frame`: semi-implicit Euler on x = p - r (the velocity
-// first, then the offset with the new velocity), damping acting on the velocity relative to the
-// target so a body in uniform motion does not lag, then the impulses, then the limits.
+// A step's joint, against the last frame: its translation minus the last frame's, and its rotation.
 template <typename Real>
-void step(const JiggleSettings<Real>& s, const Rigid<Real>& frame, JiggleState<Real>* state) {
+struct StepPose {
+  V3<Real> moved;
+  Q4<Real> rotation;
+};
+
+// One step of kJiggleStepSeconds to a joint at `pose`: semi-implicit Euler on x = p - r (the velocity
+// first, then the offset with the new velocity), damping acting on the velocity relative to the
+// target so a body in uniform motion does not lag, then the impulses, then the limits. Written in
+// quantities relative to the target (x, v - r', and r against the last frame's joint position), the
+// equations of pipeline/jiggle.cpp's old point-and-velocity form:
+//   v_{n+1} - r'_n = (v_n - r'_n) + h (-k x_n - beta (v_n - r'_n)),   x_{n+1} = x_n + h (v_{n+1} - r'_n)
+// with r'_n = (r_{n+1} - r_n) / h and v_n - r'_n = (v_n - r'_{n-1}) - (r'_n - r'_{n-1}).
+template <typename Real>
+void step(const JiggleSettings<Real>& s, const StepPose<Real>& pose, JiggleState* state) {
+  static_assert(sizeof(Real) == sizeof(double), "the state steps in double");
   const Real h = Real(kJiggleStepSeconds);
-  const V3<Real> target = add(frame.translation, rotate(frame.rotation, load3(s.rest_point)));
-  const V3<Real> moved = sub(target, load3(state->target));
-  const V3<Real> target_velocity = divided(moved, h);
+  const V3<Real> target = add(pose.moved, rotate(pose.rotation, load3(s.rest_point)));  // minus the frame's position
+  const V3<Real> target_velocity = divided(sub(target, load3(state->target_from_frame)), h);
   V3<Real> offset = load3(state->offset);
-  V3<Real> velocity = load3(state->velocity);
-  const V3<Real> acceleration =
-      sub(scaled(-s.spring_k, offset), scaled(s.spring_beta, sub(velocity, target_velocity)));
-  velocity = add(velocity, scaled(h, acceleration));
-  offset = sub(add(offset, scaled(h, velocity)), moved);
-  velocity = add(velocity, load3(state->impulse));
+  V3<Real> relative = sub(load3(state->relative_velocity), sub(target_velocity, load3(state->target_velocity)));
+  const V3<Real> acceleration = sub(scaled(-s.spring_k, offset), scaled(s.spring_beta, relative));
+  relative = add(relative, scaled(h, acceleration));
+  offset = add(offset, scaled(h, relative));
+  relative = add(relative, load3(state->impulse));
   store3(V3<Real>{0, 0, 0}, state->impulse);
-  const V3<Real> local = constrain(s, frame.rotation, target_velocity, &offset, &velocity);
+  const V3<Real> local = constrain(s, pose.rotation, &offset, &relative);
   for (int k = 0; k < 3; ++k) state->previous_local_offset[k] = state->local_offset[k];
   store3(local, state->local_offset);
   store3(offset, state->offset);
-  store3(velocity, state->velocity);
-  store3(target, state->target);
+  store3(relative, state->relative_velocity);
+  store3(target_velocity, state->target_velocity);
+  store3(target, state->target_from_frame);
 }
 
 // The joint between the last frame (s = 0) and this one (s = 1): positions lerped, rotations as
 // 4-vectors on one hemisphere lerped and normalized, as pipeline/jiggle.cpp blends its grid; a held
 // pose stays bit-exact, so a still jiggle stays exactly at rest.
 template <typename Real>
-Rigid<Real> between(const Rigid<Real>& last, const Rigid<Real>& now, Real s) {
+StepPose<Real> between(const Rigid<Real>& last, const Rigid<Real>& now, Real s) {
+  const V3<Real> moved = sub(now.translation, last.translation);
+  if (s >= Real(1)) return {moved, now.rotation};
   if (same3(last.translation, now.translation) && last.rotation.x == now.rotation.x && last.rotation.y == now.rotation.y &&
       last.rotation.z == now.rotation.z && last.rotation.w == now.rotation.w)
-    return now;
+    return {moved, now.rotation};
   Q4<Real> to = now.rotation;
   const Q4<Real>& from = last.rotation;
   if ((from.x * to.x + from.y * to.y) + (from.z * to.z + from.w * to.w) < Real(0)) to = {-to.x, -to.y, -to.z, -to.w};
   const Real r = Real(1) - s;
-  Rigid<Real> out;
-  out.translation = add(scaled(r, last.translation), scaled(s, now.translation));
-  out.rotation = normalizedQ(Q4<Real>{r * from.x + s * to.x, r * from.y + s * to.y, r * from.z + s * to.z, r * from.w + s * to.w});
-  return out;
+  return {scaled(s, moved),
+          normalizedQ(Q4<Real>{r * from.x + s * to.x, r * from.y + s * to.y, r * from.z + s * to.z, r * from.w + s * to.w})};
+}
+
+template <typename To, typename From>
+Rigid<To> castRigid(const Rigid<From>& r) {
+  return {{To(r.translation.x), To(r.translation.y), To(r.translation.z)},
+          {To(r.rotation.x), To(r.rotation.y), To(r.rotation.z), To(r.rotation.w)}};
+}
+
+// The settings the double steps read: the rig's own for a double rig, a widened copy for a float one.
+template <typename Real>
+const JiggleSettings<double>& stepSettings(const JiggleSettings<Real>& s, JiggleSettings<double>* storage) {
+  if constexpr (sizeof(Real) == sizeof(double)) {
+    (void)storage;
+    return s;
+  } else {
+    JiggleSettings<double>& w = *storage;
+    w.joint = s.joint;
+    w.parent = s.parent;
+    w.root = s.root;
+    for (int k = 0; k < 3; ++k) {
+      w.aim_axis[k] = s.aim_axis[k];
+      w.major_axis[k] = s.major_axis[k];
+      w.minor_axis[k] = s.minor_axis[k];
+      w.root_up[k] = s.root_up[k];
+      w.rest_point[k] = s.rest_point[k];
+    }
+    w.length = s.length;
+    w.max_offset = s.max_offset;
+    w.spring_k = s.spring_k;
+    w.spring_beta = s.spring_beta;
+    w.cone_gx = s.cone_gx;
+    w.cone_gy = s.cone_gy;
+    w.cone_gz = s.cone_gz;
+    w.cone_sin_major = s.cone_sin_major;
+    w.cone_cos_major = s.cone_cos_major;
+    w.cone_sin_minor = s.cone_sin_minor;
+    w.cone_cos_minor = s.cone_cos_minor;
+    return w;
+  }
 }
 
 template <typename Real>
@@ -486,13 +535,13 @@ const Real* matrixOfJoint(const Span<const Real>& matrices, int joint) {
 }
 
 template <typename Real>
-void startAt(const JiggleSettings<Real>& s, const Rigid<Real>& frame, V3<Real> target_velocity, JiggleState<Real>* state) {
-  const V3<Real> target = add(frame.translation, rotate(frame.rotation, load3(s.rest_point)));
-  const V3<Real> velocity = add(target_velocity, load3(state->impulse));
-  store3(V3<Real>{0, 0, 0}, state->impulse);
+void startAt(const JiggleSettings<Real>& s, const Rigid<Real>& frame, V3<Real> target_velocity, JiggleState* state) {
+  static_assert(sizeof(Real) == sizeof(double), "the state steps in double");
   store3(V3<Real>{0, 0, 0}, state->offset);
-  store3(velocity, state->velocity);
-  store3(target, state->target);
+  store3(load3(state->impulse), state->relative_velocity);
+  store3(V3<Real>{0, 0, 0}, state->impulse);
+  store3(target_velocity, state->target_velocity);
+  store3(rotate(frame.rotation, load3(s.rest_point)), state->target_from_frame);
   store3(V3<Real>{0, 0, 0}, state->local_offset);
   store3(V3<Real>{0, 0, 0}, state->previous_local_offset);
   store3(frame.translation, state->frame_translation);
@@ -659,15 +708,17 @@ template <typename Real>
 bool JiggleResetJob<Real>::Run() const {
   if (!Validate()) return false;
   for (std::size_t i = 0; i < rig->jiggles.size(); ++i) {
-    const JiggleSettings<Real>& s = rig->jiggles[i];
-    const Rigid<Real> frame = rigidOf(matrixOfJoint(joint_matrices, s.joint), static_cast<V3<Real>*>(nullptr));
-    V3<Real> target_velocity = {0, 0, 0};
+    JiggleSettings<double> storage;
+    const JiggleSettings<double>& s = stepSettings(rig->jiggles[i], &storage);
+    const int joint = rig->jiggles[i].joint;
+    const Rigid<double> frame = castRigid<double>(rigidOf(matrixOfJoint(joint_matrices, joint), static_cast<V3<Real>*>(nullptr)));
+    V3<double> target_velocity = {0, 0, 0};
     if (!velocity_matrices.empty()) {
-      const Rigid<Real> other = rigidOf(matrixOfJoint(velocity_matrices, s.joint), static_cast<V3<Real>*>(nullptr));
-      const V3<Real> rest = load3(s.rest_point);
-      const V3<Real> here = add(frame.translation, rotate(frame.rotation, rest));
-      const V3<Real> there = add(other.translation, rotate(other.rotation, rest));
-      target_velocity = divided(sub(there, here), velocity_time);
+      const Rigid<double> other =
+          castRigid<double>(rigidOf(matrixOfJoint(velocity_matrices, joint), static_cast<V3<Real>*>(nullptr)));
+      const V3<double> rest = load3(s.rest_point);
+      const V3<double> moved = add(sub(other.translation, frame.translation), rotate(other.rotation, rest));
+      target_velocity = divided(sub(moved, rotate(frame.rotation, rest)), double(velocity_time));
     }
     startAt(s, frame, target_velocity, &states[i]);
   }
@@ -687,47 +738,59 @@ bool JiggleJob<Real>::Validate() const {
 template <typename Real>
 bool JiggleJob<Real>::Run() const {
   if (!Validate()) return false;
-  const Real h = Real(kJiggleStepSeconds);
-  const Real tolerance = timeTolerance<Real>();
+  const double h = kJiggleStepSeconds;
+  const double tolerance = timeTolerance<Real>();
+  const double dt = delta_time;
   for (std::size_t i = 0; i < rig->jiggles.size(); ++i) {
     const JiggleSettings<Real>& s = rig->jiggles[i];
-    JiggleState<Real>& state = states[i];
+    JiggleSettings<double> storage;
+    const JiggleSettings<double>& wide = stepSettings(s, &storage);
+    JiggleState& state = states[i];
     const Real* joint = matrixOfJoint(joint_matrices, s.joint);
     const Rigid<Real> now = rigidOf(joint, static_cast<V3<Real>*>(nullptr));
+    const Rigid<double> now_wide = castRigid<double>(now);
     if (!state.started) {
-      startAt(s, now, V3<Real>{0, 0, 0}, &state);
+      startAt(wide, now_wide, V3<double>{0, 0, 0}, &state);
     } else {
       // The steps that fall in this frame: step m is m h - since_step after the last frame.
-      const Real available = state.since_step + delta_time;
-      const Real counted = std::floor((available + tolerance) / h);
-      long steps = counted > Real(0) ? static_cast<long>(std::fmin(counted, Real(1e9))) : 0;
+      const double available = state.since_step + dt;
+      const double counted = std::floor((available + tolerance) / h);
+      long steps = counted > 0.0 ? static_cast<long>(std::fmin(counted, 1e9)) : 0;
       bool squeezed = false;
       if (max_steps > 0 && steps > max_steps) {
         steps = max_steps;
         squeezed = true;
       }
-      const Rigid<Real> last = {load3(state.frame_translation), loadQ(state.frame_rotation)};
+      const Rigid<double> last = {load3(state.frame_translation), loadQ(state.frame_rotation)};
+      bool on_frame = false;
       for (long m = 1; m <= steps; ++m) {
-        Real fraction;
+        double fraction;
         if (squeezed) {
-          fraction = Real(m) / Real(steps);
+          fraction = double(m) / double(steps);
         } else {
-          const Real after = Real(m) * h - state.since_step;
-          fraction = std::fabs(after - delta_time) <= tolerance ? Real(1) : std::fmin(Real(1), after / delta_time);
+          const double after = double(m) * h - state.since_step;
+          fraction = std::fabs(after - dt) <= tolerance ? 1.0 : std::fmin(1.0, after / dt);
         }
-        step(s, fraction >= Real(1) ? now : between(last, now, fraction), &state);
+        step(wide, between(last, now_wide, fraction), &state);
+        on_frame = fraction >= 1.0;
       }
-      state.since_step = squeezed ? Real(0) : std::fmax(Real(0), available - Real(steps) * h);
-      store3(now.translation, state.frame_translation);
-      storeQ(now.rotation, state.frame_rotation);
+      state.since_step = squeezed ? 0.0 : std::fmax(0.0, available - double(steps) * h);
+      // The last target, against this frame's joint position from now on (exactly the rotated rest
+      // point when the last step was on this frame).
+      store3(on_frame ? rotate(now_wide.rotation, load3(wide.rest_point))
+                      : sub(load3(state.target_from_frame), sub(now_wide.translation, last.translation)),
+             state.target_from_frame);
+      store3(now_wide.translation, state.frame_translation);
+      storeQ(now_wide.rotation, state.frame_rotation);
     }
 
     if (corrections.empty() && points.empty() && cone_angles.empty() && local_rotations.empty() && model_matrices.empty())
       continue;
     // This frame's time is since_step after the last step: the offset there, extrapolated from the
     // last two steps (exactly the last step's when the frame is on the step grid).
-    Real offset[3];
-    blendJiggleOffset(state.previous_local_offset, state.local_offset, Real(1) + state.since_step / h, offset);
+    double blended[3];
+    blendJiggleOffset(state.previous_local_offset, state.local_offset, 1.0 + state.since_step / h, blended);
+    const Real offset[3] = {Real(blended[0]), Real(blended[1]), Real(blended[2])};
     const Real* root = matrixOfJoint(joint_matrices, s.root);
     const JiggleOutput<Real> out = evaluate(s, load3(offset), now, rotationOrIdentity(root));
     if (!corrections.empty()) storeQ(loadQ(out.correction), corrections.data + 4 * i);
@@ -776,20 +839,20 @@ bool JiggleJob<Real>::Run() const {
 }
 
 template <typename Real>
-bool applyJiggleImpulse(const typename JiggleNonDeduced<Span<JiggleState<Real>>>::type& states, std::size_t jiggle,
-                        const Real direction[3], typename JiggleNonDeduced<Real>::type magnitude) {
+bool applyJiggleImpulse(const Span<JiggleState>& states, std::size_t jiggle, const Real direction[3],
+                        typename JiggleNonDeduced<Real>::type magnitude) {
   if (jiggle >= states.size || states.data == nullptr || !finite3(direction) || !std::isfinite(magnitude)) return false;
-  const V3<Real> d = load3(direction);
-  const Real n2 = dot3(d, d);
-  if (!(n2 > Real(0)) || !std::isfinite(n2)) return false;
-  JiggleState<Real>& state = states[jiggle];
-  store3(add(load3(state.impulse), scaled(magnitude, unit3(d))), state.impulse);
+  const V3<double> d = {double(direction[0]), double(direction[1]), double(direction[2])};
+  const double n2 = dot3(d, d);
+  if (!(n2 > 0.0) || !std::isfinite(n2)) return false;
+  JiggleState& state = states[jiggle];
+  store3(add(load3(state.impulse), scaled(double(magnitude), unit3(d))), state.impulse);
   return true;
 }
 
 template <typename Real>
-int applyJiggleImpulseMask(const typename JiggleNonDeduced<Span<JiggleState<Real>>>::type& states, std::uint64_t mask,
-                           const Real direction[3], typename JiggleNonDeduced<Real>::type magnitude) {
+int applyJiggleImpulseMask(const Span<JiggleState>& states, std::uint64_t mask, const Real direction[3],
+                           typename JiggleNonDeduced<Real>::type magnitude) {
   int applied = 0;
   for (std::size_t i = 0; i < 64 && i < states.size; ++i) {
     if ((mask >> i) & 1u) applied += applyJiggleImpulse<Real>(states, i, direction, magnitude) ? 1 : 0;
@@ -809,8 +872,8 @@ int applyJiggleImpulseMask(const typename JiggleNonDeduced<Span<JiggleState<Real
   template void jiggleConeAngle(const JiggleSettings<Real>&, const Real*, Real*, Real*);                                   \
   template void jiggleAimRotation(const JiggleSettings<Real>&, const Real*, const Real*, Real*);                           \
   template void jiggleRigidFrame(const Real*, Real*, Real*, Real*);                                                        \
-  template bool applyJiggleImpulse<Real>(const Span<JiggleState<Real>>&, std::size_t, const Real*, Real);                         \
-  template int applyJiggleImpulseMask<Real>(const Span<JiggleState<Real>>&, std::uint64_t, const Real*, Real);
+  template bool applyJiggleImpulse<Real>(const Span<JiggleState>&, std::size_t, const Real*, Real);                                \
+  template int applyJiggleImpulseMask<Real>(const Span<JiggleState>&, std::uint64_t, const Real*, Real);
 
 RIGBAKE_JIGGLE_INSTANTIATE(float)
 RIGBAKE_JIGGLE_INSTANTIATE(double)
