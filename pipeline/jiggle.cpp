@@ -86,23 +86,28 @@ FrameMatrices frameMatrices(const Eigen::Affine3d& parent, const Eigen::Affine3d
   return out;
 }
 
+template <typename Real>
+runtime::JiggleSpec<Real> jiggleRuntimeSpec(const JiggleSetup& setup, int joint, int parent, int root) {
+  runtime::JiggleSpec<Real> spec;
+  spec.joint = joint;
+  spec.parent = parent;
+  spec.root = root;
+  for (int k = 0; k < 3; ++k) {
+    spec.aim_axis[k] = static_cast<Real>(setup.aim_axis[k]);
+    spec.major_axis[k] = static_cast<Real>(setup.major_axis[k]);
+    spec.root_up[k] = static_cast<Real>(setup.root_up[k]);
+  }
+  spec.length = static_cast<Real>(setup.length);
+  spec.stiffness = static_cast<Real>(setup.params.stiffness);
+  spec.damping = static_cast<Real>(setup.params.damping);
+  spec.clamp_major_deg = static_cast<Real>(setup.params.clamp_major_deg);
+  spec.clamp_minor_deg = static_cast<Real>(setup.params.clamp_minor_deg);
+  return spec;
+}
+
 // The setup as the runtime's data, for one jiggle reading FrameMatrices.
 runtime::JiggleSettings<double> jiggleRuntimeSettings(const JiggleSetup& setup) {
-  runtime::JiggleSpec<double> spec;
-  spec.joint = kFramePivot;
-  spec.parent = kFrameParent;
-  spec.root = kFrameRoot;
-  for (int k = 0; k < 3; ++k) {
-    spec.aim_axis[k] = setup.aim_axis[k];
-    spec.major_axis[k] = setup.major_axis[k];
-    spec.root_up[k] = setup.root_up[k];
-  }
-  spec.length = setup.length;
-  spec.stiffness = setup.params.stiffness;
-  spec.damping = setup.params.damping;
-  spec.clamp_major_deg = setup.params.clamp_major_deg;
-  spec.clamp_minor_deg = setup.params.clamp_minor_deg;
-  return runtime::buildJiggleSettings(spec);
+  return runtime::buildJiggleSettings(jiggleRuntimeSpec<double>(setup, kFramePivot, kFrameParent, kFrameRoot));
 }
 
 struct OutputFrame {
@@ -336,6 +341,27 @@ std::vector<JiggleTrack> simulateJiggle(const Skeleton& skeleton, const Clip& cl
   }
   return tracks;
 }
+
+template <typename Real>
+runtime::JiggleRig<Real> buildJiggleRig(const std::vector<JiggleSetup>& setups, const Skeleton& skeleton,
+                                        const std::vector<int>& carriers) {
+  runtime::JiggleRig<Real> rig;
+  rig.joint_count = skeleton.size() + static_cast<int>(carriers.size());
+  for (const JiggleSetup& setup : setups) {
+    assert(jiggleSetupProblem(setup, skeleton).empty());
+    const bool on_muscle = setup.host == JiggleHost::kMuscle;
+    assert(!on_muscle || setup.muscle < static_cast<int>(carriers.size()));
+    const int joint = on_muscle ? skeleton.size() + setup.muscle : setup.joint;
+    const int parent = on_muscle ? carriers[setup.muscle] : skeleton.parents[setup.joint];
+    const runtime::JiggleSpec<Real> spec = jiggleRuntimeSpec<Real>(setup, joint, parent, setup.root);
+    assert(runtime::jiggleSpecProblem(spec, rig.joint_count)[0] == '\0');
+    rig.jiggles.push_back(runtime::buildJiggleSettings(spec));
+  }
+  return rig;
+}
+
+template runtime::JiggleRig<float> buildJiggleRig(const std::vector<JiggleSetup>&, const Skeleton&, const std::vector<int>&);
+template runtime::JiggleRig<double> buildJiggleRig(const std::vector<JiggleSetup>&, const Skeleton&, const std::vector<int>&);
 
 std::vector<double> jiggleFrameTimes(const std::vector<double>& sample_times) {
   assert(!sample_times.empty());

@@ -169,6 +169,16 @@ ConeAngle coneAngle(const JiggleSetup& setup, const Eigen::Vector3d& q);
 // length * aim_axis.
 Eigen::Quaterniond aimRotation(const JiggleSetup& setup, const Eigen::Vector3d& q, const Eigen::Vector3d& up);
 
+// The runtime rig of `setups` (all of them, in order) for an engine's joint matrices laid out as the
+// skeleton's joints (0 .. skeleton.size() - 1) followed by the muscle rig's skinned joints (muscle m at
+// skeleton.size() + m, as runtime::MuscleRigJob writes them): joint_count = skeleton.size() +
+// muscle_count. A skeleton joint jiggle's parent is its skeleton parent (-1 at a root: model space); a
+// muscle jiggle's parent is `carriers[m]`, the joint its skinned joint rides (muscleCarrierJoint). Every
+// setup must pass jiggleSetupProblem().
+template <typename Real>
+runtime::JiggleRig<Real> buildJiggleRig(const std::vector<JiggleSetup>& setups, const Skeleton& skeleton,
+                                        const std::vector<int>& carriers);
+
 // The target names a preset jiggle can give, resolved by resolveJiggles.
 struct JigglePresetEntry {
   std::string where;     // file#pointer, for messages

@@ -562,6 +562,469 @@ TEST_CASE("runtime jiggle: the bake's jiggle tracks equal the pre-runtime code's
                 sample.tracks, sample.samples / std::max(1, sample.tracks), sample.worst, cesium_gap.tracks, cesium_gap.worst);
 }
 
+// An engine's view of a character: its skeleton's model-space matrices for a clip time, followed by
+// the skinned joints the runtime muscle rig computes from them (docs/runtime.md, "Jiggle").
+struct EngineCharacter {
+  test::Resolved resolved;
+  MuscleSet muscles;
+  std::vector<JiggleSetup> setups;
+  runtime::MuscleRig<double> muscle_rig;
+  std::vector<int> carriers;
+
+  std::vector<double> matricesAt(const Clip& clip, double time) const {
+    const Pose pose = sampleClip(resolved.character.skeleton, clip, time);
+    std::vector<double> matrices = jointMatrices(pose);
+    std::vector<double> skinned(16 * muscle_rig.muscles.size());
+    runtime::MuscleRigJob<double> job;
+    job.rig = &muscle_rig;
+    job.joint_matrices = matrices;
+    job.skinned_matrices = skinned;
+    REQUIRE(job.Run());
+    matrices.insert(matrices.end(), skinned.begin(), skinned.end());
+    return matrices;
+  }
+};
+
+EngineCharacter engineCharacter(const std::string& path, const JigglePreset& preset) {
+  EngineCharacter c;
+  c.resolved = test::resolveShipped(path);
+  c.muscles = placeMuscles(c.resolved.character, c.resolved.landmarks, test::gowPreset(), Sides::kBoth);
+  c.setups = resolveJiggles(preset, c.resolved.character.skeleton, &c.resolved.landmarks, &c.muscles);
+  c.muscle_rig = buildMuscleRig(c.muscles, c.resolved.character.skeleton);
+  for (const MusclePart& part : c.muscles.parts) c.carriers.push_back(muscleCarrierJoint(part));
+  return c;
+}
+
+const EngineCharacter& engineSample() {
+  static const EngineCharacter character =
+      engineCharacter(test::sampleGlbPath(), readJigglePreset(test::presetsDir() + "/jiggle/gow_examples.json"));
+  return character;
+}
+
+// What the bake computes for these setups over one clip (pipeline/bake.cpp's two hosts).
+std::vector<JiggleTrack> bakedTracks(const EngineCharacter& c, const Clip& clip, const std::vector<double>& times,
+                                     const std::vector<HitImpulse>& hits) {
+  const Skeleton& skeleton = c.resolved.character.skeleton;
+  const std::vector<JiggleTrack> skeleton_tracks = simulateJiggle(skeleton, clip, times, c.setups, hits);
+  std::vector<JiggleTrack> tracks;
+  size_t next = 0;
+  for (const JiggleSetup& setup : c.setups) {
+    if (setup.host == JiggleHost::kSkeletonJoint) {
+      tracks.push_back(skeleton_tracks[next++]);
+      continue;
+    }
+    const MusclePart& part = c.muscles.parts[setup.muscle];
+    const std::vector<double> frame_times = jiggleFrameTimes(times);
+    std::vector<JiggleFrame> frames;
+    for (double time : frame_times) {
+      const Pose pose = sampleClip(skeleton, clip, time);
+      JiggleFrame frame;
+      frame.parent = pose.world[muscleCarrierJoint(part)];
+      frame.root = pose.world[setup.root];
+      frame.pivot = evaluateMuscle(part, skeleton, pose).skinned;
+      frames.push_back(frame);
+    }
+    tracks.push_back(simulateJiggleFrames(setup, times, frame_times, frames, hits, clip.name));
+  }
+  return tracks;
+}
+
+// One engine frame's outputs for every jiggle.
+template <typename Real>
+struct EngineFrame {
+  double time = 0.0;
+  std::vector<Real> corrections, local_rotations, model_matrices, points, cone_angles;
+};
+
+// Drives the runtime as an engine does: a reset on the first frame (moving with the pose one step
+// later, as the bake starts), then one Run per frame with the frame's delta time; a hit is applied
+// before the Run whose steps include the step it acts at (the bake's rule).
+template <typename Real>
+std::vector<EngineFrame<Real>> runEngine(const EngineCharacter& c, const Clip& clip, const std::vector<double>& frame_times,
+                                         const std::vector<HitImpulse>& hits, const std::vector<double>* one_step_later = nullptr) {
+  const runtime::JiggleRig<Real> rig = buildJiggleRig<Real>(c.setups, c.resolved.character.skeleton, c.carriers);
+  REQUIRE(std::string(runtime::jiggleRigProblem(rig)).empty());
+  const size_t n = rig.jiggles.size();
+  std::vector<runtime::JiggleState> states(n);
+  auto asReal = [](const std::vector<double>& m) { return std::vector<Real>(m.begin(), m.end()); };
+  const double h = kJiggleTimestep, t0 = frame_times.front();
+  auto kick = [&](double from, double to) {
+    for (const HitImpulse& hit : hits) {
+      if (!hit.clip.empty() && hit.clip != clip.name) continue;
+      const double at = t0 + std::max(0.0, std::ceil((hit.time - t0) / h - 1e-9)) * h;
+      if (!(at > from + 1e-9 && at <= to + 1e-9)) continue;
+      const Real direction[3] = {Real(hit.direction.x()), Real(hit.direction.y()), Real(hit.direction.z())};
+      for (size_t j = 0; j < n; ++j) {
+        for (const std::string& part : hit.joints) {
+          const std::vector<std::string>& parts = c.setups[j].parts;
+          if (std::find(parts.begin(), parts.end(), part) != parts.end()) {
+            REQUIRE(runtime::applyJiggleImpulse<Real>(states, j, direction, Real(hit.magnitude)));
+            break;
+          }
+        }
+      }
+    }
+  };
+  kick(-1e300, t0);
+  const std::vector<Real> first = asReal(c.matricesAt(clip, t0));
+  const std::vector<Real> next = asReal(one_step_later ? *one_step_later : c.matricesAt(clip, t0 + h));
+  runtime::JiggleResetJob<Real> reset;
+  reset.rig = &rig;
+  reset.joint_matrices = first;
+  reset.velocity_matrices = next;
+  reset.velocity_time = Real(h);
+  reset.states = states;
+  REQUIRE(reset.Run());
+  std::vector<EngineFrame<Real>> out;
+  for (size_t f = 0; f < frame_times.size(); ++f) {
+    EngineFrame<Real> frame;
+    frame.time = frame_times[f];
+    frame.corrections.resize(4 * n);
+    frame.local_rotations.resize(4 * n);
+    frame.model_matrices.resize(16 * n);
+    frame.points.resize(3 * n);
+    frame.cone_angles.resize(2 * n);
+    if (f > 0) kick(frame_times[f - 1], frame_times[f]);
+    const std::vector<Real> matrices = f == 0 ? first : asReal(c.matricesAt(clip, frame_times[f]));
+    runtime::JiggleJob<Real> job;
+    job.rig = &rig;
+    job.joint_matrices = matrices;
+    job.delta_time = Real(f == 0 ? 0.0 : frame_times[f] - frame_times[f - 1]);
+    job.states = states;
+    job.corrections = frame.corrections;
+    job.local_rotations = frame.local_rotations;
+    job.model_matrices = frame.model_matrices;
+    job.points = frame.points;
+    job.cone_angles = frame.cone_angles;
+    REQUIRE(job.Run());
+    out.push_back(std::move(frame));
+  }
+  return out;
+}
+
+std::vector<double> framesAt(double fps, double duration) {
+  std::vector<double> times;
+  for (int k = 0; k / fps <= duration + 1e-9; ++k) times.push_back(k / fps);
+  return times;
+}
+
+template <typename Real>
+Eigen::Quaterniond quaternionAt(const std::vector<Real>& values, size_t j) {
+  return Eigen::Quaterniond(values[4 * j + 3], values[4 * j], values[4 * j + 1], values[4 * j + 2]);
+}
+
+// The angle of the rotation between two orientations (atan2 of the relative quaternion: acos of a
+// dot product near 1 resolves only 1e-8 radians).
+double angleBetweenDeg(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {
+  const Eigen::Quaterniond d = a.normalized().conjugate() * b.normalized();
+  return 2.0 * std::atan2(d.vec().norm(), std::abs(d.w())) / kRadian;
+}
+
+struct EngineGap {
+  double point = 0.0;         // jiggle point, fraction of the jiggle's length
+  double correction_deg = 0.0;  // the jiggle rotation in the joint's frame
+  double rotation_deg = 0.0;  // the jiggled local rotation
+  int compared = 0;
+};
+
+// The joint's animated local rotation as the bake reads it: the clip's own TRS for a skeleton joint,
+// the muscle's skinned joint relative to its carrier for a muscle.
+Eigen::Quaterniond animatedLocalRotation(const EngineCharacter& c, const Clip& clip, double time, const JiggleSetup& setup) {
+  const Skeleton& skeleton = c.resolved.character.skeleton;
+  const Pose pose = sampleClip(skeleton, clip, time);
+  if (setup.host == JiggleHost::kSkeletonJoint) return pose.local[setup.joint].rotation;
+  const MusclePart& part = c.muscles.parts[setup.muscle];
+  return decomposeTrs(pose.world[muscleCarrierJoint(part)].inverse() * evaluateMuscle(part, skeleton, pose).skinned).rotation;
+}
+
+// The engine's frames against the bake's samples at the times they share.
+template <typename Real>
+EngineGap engineAgainstBake(const EngineCharacter& c, const Clip& clip, const std::vector<EngineFrame<Real>>& frames,
+                            const std::vector<JiggleTrack>& tracks) {
+  EngineGap gap;
+  for (const EngineFrame<Real>& frame : frames) {
+    for (size_t s = 0; s < tracks.size(); ++s) {
+      const JiggleTrack& track = tracks[s];
+      for (size_t i = 0; i < track.times.size(); ++i) {
+        if (std::abs(track.times[i] - frame.time) > 1e-9) continue;
+        const Eigen::Vector3d point(frame.points[3 * s], frame.points[3 * s + 1], frame.points[3 * s + 2]);
+        gap.point = std::max(gap.point, (point - track.point[i]).norm() / c.setups[s].length);
+        const Eigen::Quaterniond animated = animatedLocalRotation(c, clip, frame.time, c.setups[s]);
+        const Eigen::Quaterniond baked_correction = (animated.inverse() * track.local[i].rotation).normalized();
+        gap.correction_deg = std::max(gap.correction_deg, angleBetweenDeg(quaternionAt(frame.corrections, s), baked_correction));
+        gap.rotation_deg = std::max(gap.rotation_deg, angleBetweenDeg(quaternionAt(frame.local_rotations, s), track.local[i].rotation));
+        ++gap.compared;
+      }
+    }
+  }
+  return gap;
+}
+
+const std::vector<HitImpulse>& engineHits() {
+  static const std::vector<HitImpulse> hits = {hitOn({"JOLeftHand1", "LeftBicep"}, 0.0, {0.0, 0.0, 1.0}, 1.5),
+                                               hitOn({"JORightHand1", "JOHead1"}, 0.41, {1.0, 0.5, -0.2}, 2.0)};
+  return hits;
+}
+
+// CesiumMan with the talk's settings on what it has: hands, head and both biceps (no forearm twist joints).
+JigglePreset cesiumPreset() {
+  const std::string presets = test::presetsDir() + "/jiggle/";
+  JigglePreset preset = readJigglePreset(presets + "gow_examples.json");
+  preset.jiggles.erase(preset.jiggles.begin() + 2, preset.jiggles.begin() + 4);
+  preset.jiggles.push_back(readJigglePreset(presets + "biceps.json").jiggles[1]);
+  return preset;
+}
+
+struct SweepFigures {
+  double exact = 0.0;         // 240 fps: jiggle point (fraction of length) and correction (degrees)
+  double local_deg = 0.0;     // 240 fps: local rotation read from matrices against the clip's
+  double point = 0.0;         // 30 to 144 fps: jiggle point, fraction of length
+  double rotation_deg = 0.0;  // 30 to 144 fps: correction
+};
+
+SweepFigures engineSweep(const EngineCharacter& c, const std::vector<HitImpulse>& hits) {
+  SweepFigures figures;
+  for (const Clip& clip : c.resolved.character.clips) {
+    INFO("clip " << clip.name);
+    // Sampled at 30 fps from 0, the bake's sample times lie on its step grid.
+    const std::vector<double> samples = framesAt(30.0, clip.duration);
+    // At the step rate the engine takes exactly the bake's steps on exactly its frames, hits included.
+    const std::vector<JiggleTrack> kicked = bakedTracks(c, clip, samples, hits);
+    const EngineGap exact = engineAgainstBake(c, clip, runEngine<double>(c, clip, framesAt(240.0, samples.back()), hits), kicked);
+    CHECK(exact.compared == static_cast<int>(samples.size() * kicked.size()));
+    CHECK(exact.point < 1e-12);
+    CHECK(exact.correction_deg < 1e-9);
+    // The local rotation the engine reads out of parent^-1 * joint against the clip's own key.
+    CHECK(exact.rotation_deg < 1e-9);
+    figures.exact = std::max({figures.exact, exact.point, exact.correction_deg});
+    figures.local_deg = std::max(figures.local_deg, exact.rotation_deg);
+    // At lower rates the steps between two frames see the joint interpolated between them rather than
+    // the clip sampled there (and at 144 fps most frames fall between steps, extrapolated). Without
+    // hits: an engine's hit acts at the first step of its frame, the bake's at its exact step.
+    const std::vector<JiggleTrack> free = bakedTracks(c, clip, samples, {});
+    for (double fps : {30.0, 60.0, 120.0, 144.0}) {
+      const EngineGap gap = engineAgainstBake(c, clip, runEngine<double>(c, clip, framesAt(fps, samples.back()), {}), free);
+      CHECK(gap.compared > 0);
+      figures.point = std::max(figures.point, gap.point);
+      figures.rotation_deg = std::max(figures.rotation_deg, gap.correction_deg);
+      if (verboseRun())
+        std::printf("engine at %.0f fps vs bake, %s: jiggle point %.4f%% of length, rotation %.4f deg (%d compared)\n", fps,
+                    clip.name.c_str(), 100.0 * gap.point, gap.correction_deg, gap.compared);
+    }
+  }
+  return figures;
+}
+
+TEST_CASE("runtime jiggle: an engine stepping the job at 240 fps reproduces the bake, hits included") {
+  const EngineCharacter& sample = engineSample();
+  REQUIRE(sample.setups.size() == 6);
+  const SweepFigures rom = engineSweep(sample, engineHits());
+  const std::string cesium_path = test::requireAsset("CesiumMan.glb");
+  SweepFigures walk;
+  if (!cesium_path.empty()) {
+    const EngineCharacter cesium = engineCharacter(cesium_path, cesiumPreset());
+    walk = engineSweep(cesium, {hitOn({"LeftBicep", "Skeleton_neck_joint_2"}, 0.5, {0.3, 0.0, 1.0}, 1.0)});
+  }
+  // At 30 to 144 fps the figures are what an engine sees that the bake does not: the joint between
+  // frames. No bound: the sample's clips are range-of-motion sweeps (and CesiumMan's walk starts with a
+  // jump) that throw the talk's lightly damped settings against their cone and distance limit, where
+  // the motion is as sensitive to what happens between frames as the bake's own Catmull-Rom path from
+  // 30 to 120 fps frames shows (3.6 to 9.9% of the length from its exact grid, measured when this test
+  // was written). The smooth-motion test below bounds the frame-rate effect where it is meaningful.
+  if (verboseRun())
+    std::printf("engine vs bake: at 240 fps %.3g (local rotations %.3g deg); 30-144 fps: sample ROM clips %.3f%% of the "
+                "length, %.3f deg; CesiumMan walk %.3f%%, %.3f deg\n",
+                std::max(rom.exact, walk.exact), std::max(rom.local_deg, walk.local_deg), 100.0 * rom.point, rom.rotation_deg,
+                100.0 * walk.point, walk.rotation_deg);
+}
+
+TEST_CASE("runtime jiggle: between frames the job steps against the joint lerped (position) and nlerped (rotation)") {
+  // The engine at 30 fps against the pipeline given, at every step, that interpolation of the same
+  // 30 fps frames: the same steps, so the same jiggle.
+  const EngineCharacter& c = engineSample();
+  const Skeleton& skeleton = c.resolved.character.skeleton;
+  const Clip& clip = clipOfBake(c.resolved.character, "ArmRaise");
+  const std::vector<double> frames30 = framesAt(30.0, clip.duration);
+  const std::vector<double> steps = framesAt(240.0, frames30.back());
+  // The jiggling joints one step into the clip as the engine's interpolation has them, for the reset's
+  // velocity (the pipeline starts moving with the step-1 frame it is given).
+  std::vector<double> one_step_later = c.matricesAt(clip, 0.0);
+  {
+    const Pose a = sampleClip(skeleton, clip, 0.0), b = sampleClip(skeleton, clip, frames30[1]);
+    for (const JiggleSetup& setup : c.setups) {
+      if (setup.host != JiggleHost::kSkeletonJoint) continue;
+      const Trs ta = decomposeTrs(a.world[setup.joint]), tb = decomposeTrs(b.world[setup.joint]);
+      Eigen::Quaterniond qb = tb.rotation;
+      if (ta.rotation.dot(qb) < 0.0) qb.coeffs() *= -1.0;
+      const Eigen::Affine3d m = Eigen::Translation3d(0.875 * ta.translation + 0.125 * tb.translation) *
+                                Eigen::Quaterniond(0.875 * ta.rotation.coeffs() + 0.125 * qb.coeffs()).normalized();
+      Eigen::Map<Eigen::Matrix4d>(one_step_later.data() + 16 * setup.joint) = m.matrix();
+    }
+  }
+  const std::vector<EngineFrame<double>> engine = runEngine<double>(c, clip, frames30, {}, &one_step_later);
+  double worst = 0.0;
+  for (size_t s = 0; s < c.setups.size(); ++s) {
+    JiggleSetup setup = c.setups[s];
+    if (setup.host != JiggleHost::kSkeletonJoint) continue;
+    std::vector<Trs> at;
+    std::vector<Eigen::Affine3d> roots;
+    for (double time : frames30) {
+      const Pose pose = sampleClip(skeleton, clip, time);
+      at.push_back(decomposeTrs(pose.world[setup.joint]));
+      roots.push_back(pose.world[setup.root]);
+    }
+    std::vector<JiggleFrame> frames;
+    for (size_t n = 0; n < steps.size(); ++n) {
+      const size_t k = std::min(n / 8, at.size() - 2);
+      const double f = (static_cast<double>(n) - 8.0 * static_cast<double>(k)) / 8.0;
+      Eigen::Quaterniond a = at[k].rotation, b = at[k + 1].rotation;
+      if (a.dot(b) < 0.0) b.coeffs() *= -1.0;
+      JiggleFrame frame;
+      frame.pivot = Eigen::Translation3d((1.0 - f) * at[k].translation + f * at[k + 1].translation) *
+                    Eigen::Quaterniond((1.0 - f) * a.coeffs() + f * b.coeffs()).normalized();
+      if (f == 0.0) frame.pivot = Eigen::Translation3d(at[k].translation) * a;
+      frame.root = f == 0.0 ? roots[k] : roots[k + 1];
+      frames.push_back(frame);
+    }
+    setup.host = JiggleHost::kMuscle;  // a caller-driven jiggle
+    setup.muscle = 0;
+    const JiggleTrack lerped = simulateJiggleFrames(setup, frames30, steps, frames, {}, clip.name);
+    for (size_t i = 0; i < frames30.size(); ++i) {
+      const Eigen::Vector3d point(engine[i].points[3 * s], engine[i].points[3 * s + 1], engine[i].points[3 * s + 2]);
+      worst = std::max(worst, (point - lerped.point[i]).norm() / setup.length);
+    }
+  }
+  CHECK(worst < 1e-10);
+}
+
+// A smooth swing and sway of one joint (0.3 radians at 0.7 and 1.3 Hz, 6 cm at 0.9 Hz).
+Eigen::Affine3d smoothPivot(double time) {
+  const double tau = 2.0 * 3.14159265358979323846;
+  return Eigen::Translation3d(0.06 * std::sin(tau * 0.9 * time), 0.1 * std::cos(tau * 0.5 * time), 0.0) *
+         Eigen::AngleAxisd(0.3 * std::sin(tau * 0.7 * time), Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(0.15 * std::sin(tau * 1.3 * time + 0.4), Eigen::Vector3d::UnitY());
+}
+
+TEST_CASE("runtime jiggle: on a smooth motion an engine at 30 to 144 fps stays within 1% of the bake at its frames") {
+  // The bake, given the motion at every step and frame time (jiggleFrameTimes), samples its output on
+  // time between steps; the engine interpolates between its frames and extrapolates to its frame time.
+  double worst = 0.0;
+  const std::vector<std::pair<double, double>> settings = {{0.05, 0.1}, {0.15, 0.025}, {0.5, 0.05}, {1.0, 1.0}};
+  for (const auto& [stiffness, damping] : settings) {
+    JiggleSetup setup;
+    setup.name = "probe";
+    setup.host = JiggleHost::kMuscle;
+    setup.muscle = 0;
+    setup.length = 0.25;
+    setup.params.stiffness = stiffness;
+    setup.params.damping = damping;
+    runtime::JiggleRig<double> rig;
+    rig.joint_count = 1;
+    runtime::JiggleSpec<double> spec;
+    spec.joint = 0;
+    spec.length = setup.length;
+    spec.stiffness = stiffness;
+    spec.damping = damping;
+    rig.jiggles = {runtime::buildJiggleSettings(spec)};
+    for (double fps : {30.0, 60.0, 120.0, 144.0}) {
+      const std::vector<double> times = framesAt(fps, 3.0);
+      const std::vector<double> frame_times = jiggleFrameTimes(times);
+      std::vector<JiggleFrame> frames;
+      for (double time : frame_times) {
+        JiggleFrame frame;
+        frame.pivot = smoothPivot(time);
+        frames.push_back(frame);
+      }
+      const JiggleTrack baked = simulateJiggleFrames(setup, times, frame_times, frames, {}, "");
+      std::vector<runtime::JiggleState> states(1);
+      std::vector<double> point(3);
+      for (size_t f = 0; f < times.size(); ++f) {
+        const Eigen::Matrix4d m = smoothPivot(times[f]).matrix();
+        const Eigen::Matrix4d next = smoothPivot(times[f] + kJiggleTimestep).matrix();
+        if (f == 0) {
+          runtime::JiggleResetJob<double> reset;
+          reset.rig = &rig;
+          reset.joint_matrices = {m.data(), 16};
+          reset.velocity_matrices = {next.data(), 16};
+          reset.velocity_time = kJiggleTimestep;
+          reset.states = states;
+          REQUIRE(reset.Run());
+        }
+        runtime::JiggleJob<double> job;
+        job.rig = &rig;
+        job.joint_matrices = {m.data(), 16};
+        job.delta_time = f == 0 ? 0.0 : times[f] - times[f - 1];
+        job.states = states;
+        job.points = point;
+        REQUIRE(job.Run());
+        worst = std::max(worst, (Eigen::Vector3d(point[0], point[1], point[2]) - baked.point[f]).norm() / setup.length);
+      }
+    }
+  }
+  if (verboseRun()) std::printf("smooth motion, engine at 30-144 fps vs bake: %.4f%% of the jiggle length\n", 100.0 * worst);
+  CHECK(worst < 0.01);
+}
+
+struct FloatGap {
+  double correction_deg = 0.0;  // angle between the float and double corrections
+  double local_deg = 0.0;       // between the jiggled local rotations
+  double cone_deg = 0.0;        // |difference| of the cone angles
+  double model = 0.0;           // largest difference of the model matrices' entries
+  double max_angle = 0.0;       // how far the jiggles moved (degrees)
+  int frames = 0;
+};
+
+void floatAgainstDouble(const EngineCharacter& c, double fps, const std::vector<HitImpulse>& hits, FloatGap* gap) {
+  for (const Clip& clip : c.resolved.character.clips) {
+    const std::vector<double> times = framesAt(fps, clip.duration);
+    const std::vector<EngineFrame<double>> wide = runEngine<double>(c, clip, times, hits);
+    const std::vector<EngineFrame<float>> narrow = runEngine<float>(c, clip, times, hits);
+    for (size_t f = 0; f < times.size(); ++f) {
+      for (size_t s = 0; s < c.setups.size(); ++s) {
+        gap->correction_deg =
+            std::max(gap->correction_deg, angleBetweenDeg(quaternionAt(wide[f].corrections, s), quaternionAt(narrow[f].corrections, s)));
+        gap->local_deg = std::max(gap->local_deg,
+                                  angleBetweenDeg(quaternionAt(wide[f].local_rotations, s), quaternionAt(narrow[f].local_rotations, s)));
+        gap->cone_deg = std::max(gap->cone_deg, std::abs(wide[f].cone_angles[2 * s] - double(narrow[f].cone_angles[2 * s])));
+        for (int k = 0; k < 16; ++k)
+          gap->model = std::max(gap->model, std::abs(wide[f].model_matrices[16 * s + k] - double(narrow[f].model_matrices[16 * s + k])));
+        gap->max_angle = std::max(gap->max_angle, wide[f].cone_angles[2 * s]);
+      }
+      ++gap->frames;
+    }
+  }
+}
+
+TEST_CASE("runtime jiggle: the float runtime agrees with the double one within 0.05 degrees over every clip") {
+  // The same frames (the float job gets them rounded to float), the talk's settings, hits. The bound is
+  // measured, not derived: with the state in double the gap was 0.0023 degrees on the sample and 0.023
+  // on CesiumMan when this test was written. It is not float's per-frame rounding alone but the
+  // jiggle's sensitivity to any perturbation of its input (the targets' finite differences over a
+  // 1/240 s step, the contacts with the cone and the distance limit): the double runtime given the
+  // float-rounded matrices differs from the float runtime by 0.026 / 0.023 degrees too. The 1e-4
+  // degrees first aimed at is not reached.
+  FloatGap sample;
+  for (double fps : {30.0, 60.0, 144.0}) floatAgainstDouble(engineSample(), fps, engineHits(), &sample);
+  CHECK(sample.max_angle > 45.0);
+  CHECK(sample.correction_deg < 0.05);
+  CHECK(sample.local_deg < 0.05);
+  CHECK(sample.cone_deg < 0.05);
+  FloatGap walk;
+  const std::string cesium_path = test::requireAsset("CesiumMan.glb");
+  if (!cesium_path.empty()) {
+    const EngineCharacter cesium = engineCharacter(cesium_path, cesiumPreset());
+    floatAgainstDouble(cesium, 60.0, {hitOn({"LeftBicep", "Skeleton_neck_joint_2"}, 0.5, {0.3, 0.0, 1.0}, 1.0)}, &walk);
+    CHECK(walk.correction_deg < 0.05);
+    CHECK(walk.local_deg < 0.05);
+    CHECK(walk.cone_deg < 0.05);
+  }
+  if (verboseRun())
+    std::printf("float vs double runtime: sample (%d frames at 30/60/144 fps, jiggles up to %.1f deg) correction %.3g deg, "
+                "local rotation %.3g deg, cone angle %.3g deg, model matrix %.3g; CesiumMan (%d frames) %.3g / %.3g / %.3g deg\n",
+                sample.frames, sample.max_angle, sample.correction_deg, sample.local_deg, sample.cone_deg, sample.model, walk.frames,
+                walk.correction_deg, walk.local_deg, walk.cone_deg);
+}
+
 }  // namespace
 }  // namespace runtime_jiggle_test
 }  // namespace rigbake
