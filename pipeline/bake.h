@@ -32,6 +32,15 @@ enum class ResponseMode {
 const char* responseModeName(ResponseMode mode);
 bool parseResponseMode(const std::string& name, ResponseMode* mode);
 
+// How the muscle joints move in the written file (docs/runtime.md, "Choosing a mode").
+enum class MuscleMotion {
+  kRuntime,  // the RIGBAKE_muscle_rig extension only: engines evaluate the rig; +0 sampled channels
+  kSampled,  // channels for the skinned joints (and the helpers with helper_joints), no extension
+  kBoth,     // the extension and the skinned joints' channels, for players that may not run the rig
+};
+const char* muscleMotionName(MuscleMotion motion);
+bool parseMuscleMotion(const std::string& name, MuscleMotion* motion);
+
 struct BakeOptions {
   int influences = 4;  // 4, 7 or 10
   GltfWeights gltf_weights = GltfWeights::kMilli;
@@ -46,6 +55,8 @@ struct BakeOptions {
   bool measure_quality = true;  // volumes against plain and dual-quaternion skinning, per clip and region
   ResponseMode response = ResponseMode::kAuto;
   ResponseFitOptions fit;
+  MuscleMotion motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;  // also write base, tip and driver as nodes (and, when sampled, channels)
 };
 
 // The four joints of one muscle group. Each is a new node: the skinned joint is also added to every
@@ -120,6 +131,9 @@ struct BakeResult {
   // Volume against the input's own and dual-quaternion skinning, with the WEIGHTS_n written.
   DeformationQuality quality;
   ResponseFitReport fit;  // parameters == 0 when nothing was fitted
+  MuscleMotion motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;
+  std::vector<JiggleSetup> jiggles;  // as baked (for the extension)
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).
