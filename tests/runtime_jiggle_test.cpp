@@ -998,11 +998,12 @@ void floatAgainstDouble(const EngineCharacter& c, double fps, const std::vector<
 TEST_CASE("runtime jiggle: the float runtime agrees with the double one within 0.05 degrees over every clip") {
   // The same frames (the float job gets them rounded to float), the talk's settings, hits. The bound is
   // measured, not derived: with the state in double the gap was 0.0023 degrees on the sample and 0.023
-  // on CesiumMan when this test was written. It is not float's per-frame rounding alone but the
-  // jiggle's sensitivity to any perturbation of its input (the targets' finite differences over a
-  // 1/240 s step, the contacts with the cone and the distance limit): the double runtime given the
-  // float-rounded matrices differs from the float runtime by 0.026 / 0.023 degrees too. The 1e-4
-  // degrees first aimed at is not reached.
+  // on CesiumMan when this test was written. The 1e-4 degrees first aimed at is out of reach for any
+  // runtime fed float matrices on these clips: the double runtime given the float-rounded matrices
+  // was 0.026 degrees from the float runtime on the sample, so (triangle inequality, 0.026 - 0.0023)
+  // the double runtime alone moves at least 0.024 degrees when its input is rounded to float - the
+  // jiggle's sensitivity to its input near the cone and the distance limit, not float arithmetic. On
+  // CesiumMan the two figures are equal (0.023), which does not tell the two causes apart.
   FloatGap sample;
   for (double fps : {30.0, 60.0, 144.0}) floatAgainstDouble(engineSample(), fps, engineHits(), &sample);
   CHECK(sample.max_angle > 45.0);
