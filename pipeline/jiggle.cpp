@@ -1,4 +1,6 @@
-// Jiggle dynamics (pipeline/jiggle.h).
+// Jiggle dynamics (pipeline/jiggle.h): presets and hits resolved by name, the animation supplied at
+// every internal step, and the runtime's jobs (runtime/jiggle.cpp, where the spring, the limits, the
+// cone and the aim transformation are implemented, once) stepped through it.
 //
 // Sources:
 //  - Tenghao Wang, "Joint-Based Skin Deformation in God of War Ragnarök", GDC 2023: "Jiggle Dynamics"
@@ -16,6 +18,7 @@
 #include "pipeline/jiggle.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 #include <functional>
@@ -30,49 +33,15 @@
 namespace rigbake {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegree = kPi / 180.0;
-// Below this |sin| between the aim and the up vector the talk's aim frame is ill-conditioned; the
-// shortest-arc rotation (identical for motion in the aim-up plane) takes over.
-constexpr double kAimDegenerateSin = 1e-6;
 // Frame times this close are the same instant (t0 + n h and n/fps differ by rounding).
 constexpr double kFrameTimeTolerance = 1e-9;
 
+// The rigid part of a caller's frame (decomposeTrs, scale removed): what the Catmull-Rom path between
+// caller-given frames blends, and what tells a held pose.
 struct RigidFrame {
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  // the pivot's, scale removed
   Eigen::Quaterniond root = Eigen::Quaterniond::Identity();      // the root's, scale removed
-};
-
-// One cone in the (major, aim, minor) = (x, y, z) coordinates of the talk, with its equation
-// y^2 = x^2 / tan^2(a) + z^2 / tan^2(b) multiplied through by sin^2(a) sin^2(b), so that 90-degree
-// half-angles (tan infinite) stay finite: G = x^2 c_a^2 s_b^2 + z^2 c_b^2 s_a^2 - y^2 s_a^2 s_b^2.
-struct Cone {
-  Eigen::Vector3d aim, major, minor;
-  double gx, gy, gz;  // G = gx x^2 + gz z^2 - gy y^2
-  double sa, ca, sb, cb;
-
-  explicit Cone(const JiggleSetup& setup) {
-    aim = setup.aim_axis;
-    major = setup.major_axis;
-    minor = aim.cross(major);
-    const double a = std::max(setup.params.clamp_major_deg, kMinClampDeg) * kDegree;
-    const double b = std::max(setup.params.clamp_minor_deg, kMinClampDeg) * kDegree;
-    sa = std::sin(a);
-    ca = std::cos(a);
-    sb = std::sin(b);
-    cb = std::cos(b);
-    gx = ca * ca * sb * sb;
-    gz = cb * cb * sa * sa;
-    gy = sa * sa * sb * sb;
-  }
-  Eigen::Vector3d coords(const Eigen::Vector3d& q) const { return {q.dot(major), q.dot(aim), q.dot(minor)}; }
-  double value(const Eigen::Vector3d& c) const { return gx * c.x() * c.x() + gz * c.z() * c.z() - gy * c.y() * c.y(); }
-  bool inside(const Eigen::Vector3d& c) const { return c.y() >= 0.0 && value(c) <= 0.0; }
-  // Outward normal (grad G) in the joint's frame.
-  Eigen::Vector3d normal(const Eigen::Vector3d& c) const {
-    return 2.0 * (gx * c.x() * major - gy * c.y() * aim + gz * c.z() * minor);
-  }
 };
 
 // The axis (of `order`) of a rotation most perpendicular to a unit direction given in the same frame.
@@ -104,78 +73,106 @@ bool hitReaches(const HitImpulse& hit, const JiggleSetup& setup, const std::stri
   return false;
 }
 
+// One instant as the runtime reads it: the model-space (scene world) matrices of the jiggling joint's
+// parent, the joint as animated, and its root, 16 numbers each, column-major, at these indices.
+constexpr int kFrameParent = 0, kFramePivot = 1, kFrameRoot = 2;
+using FrameMatrices = std::array<double, 48>;
+
+FrameMatrices frameMatrices(const Eigen::Affine3d& parent, const Eigen::Affine3d& pivot, const Eigen::Affine3d& root) {
+  FrameMatrices out;
+  Eigen::Map<Eigen::Matrix4d>(out.data() + 16 * kFrameParent) = parent.matrix();
+  Eigen::Map<Eigen::Matrix4d>(out.data() + 16 * kFramePivot) = pivot.matrix();
+  Eigen::Map<Eigen::Matrix4d>(out.data() + 16 * kFrameRoot) = root.matrix();
+  return out;
+}
+
+template <typename Real>
+runtime::JiggleSpec<Real> jiggleRuntimeSpec(const JiggleSetup& setup, int joint, int parent, int root) {
+  runtime::JiggleSpec<Real> spec;
+  spec.joint = joint;
+  spec.parent = parent;
+  spec.root = root;
+  for (int k = 0; k < 3; ++k) {
+    spec.aim_axis[k] = static_cast<Real>(setup.aim_axis[k]);
+    spec.major_axis[k] = static_cast<Real>(setup.major_axis[k]);
+    spec.root_up[k] = static_cast<Real>(setup.root_up[k]);
+  }
+  spec.length = static_cast<Real>(setup.length);
+  spec.stiffness = static_cast<Real>(setup.params.stiffness);
+  spec.damping = static_cast<Real>(setup.params.damping);
+  spec.clamp_major_deg = static_cast<Real>(setup.params.clamp_major_deg);
+  spec.clamp_minor_deg = static_cast<Real>(setup.params.clamp_minor_deg);
+  return spec;
+}
+
+// The setup as the runtime's data, for one jiggle reading FrameMatrices.
+runtime::JiggleSettings<double> jiggleRuntimeSettings(const JiggleSetup& setup) {
+  return runtime::buildJiggleSettings(jiggleRuntimeSpec<double>(setup, kFramePivot, kFrameParent, kFrameRoot));
+}
+
 struct OutputFrame {
-  RigidFrame rigid;
+  FrameMatrices matrices;
   Trs local;  // the jiggling joint's animated local TRS
 };
 
-// The simulation shared by both hosts: `grid[n]` is the animated frame at t0 + n h (n = 0..N),
-// `outputs[i]` the one at sample_times[i].
-JiggleTrack simulate(const JiggleSetup& setup, const std::vector<double>& sample_times, const std::vector<RigidFrame>& grid,
+// The simulation shared by both hosts, run by the runtime: `grid[n]` is the animated frame at t0 + n h
+// (n = 0..N), `outputs[i]` the one at sample_times[i]. The runtime's JiggleJob takes one step per grid
+// frame (a frame delta of exactly one step lands on it, so no target is interpolated), and the output
+// at a sample time between two steps blends their offsets in the joint's frame (the cone is convex
+// there), put back on the animation sampled exactly at that time: the bake knows the next step, which
+// an engine does not (its JiggleJob extrapolates from the last two steps instead, docs/runtime.md).
+JiggleTrack simulate(const JiggleSetup& setup, const std::vector<double>& sample_times, const std::vector<FrameMatrices>& grid,
                      const std::vector<OutputFrame>& outputs, const std::vector<HitImpulse>& hits,
                      const std::string& clip_name) {
   assert(!sample_times.empty() && grid.size() >= 2 && outputs.size() == sample_times.size());
   const double h = kJiggleTimestep;
   const double t0 = sample_times.front();
   const int steps = static_cast<int>(grid.size()) - 1;
-  const SpringConstants spring = springConstants(setup.params);
-  const Cone cone(setup);
-  const Eigen::Vector3d rest_point = setup.length * setup.aim_axis;
-  const double max_offset = kMaxJiggleOffset * setup.length;
-  auto target = [&](int n) -> Eigen::Vector3d { return grid[n].translation + grid[n].rotation * rest_point; };
+  runtime::JiggleRig<double> rig;
+  rig.joint_count = 3;
+  rig.jiggles = {jiggleRuntimeSettings(setup)};
+  assert(runtime::jiggleRigProblem(rig)[0] == '\0');
+  const runtime::JiggleSettings<double>& settings = rig.jiggles.front();
+  std::vector<runtime::JiggleState> state(1);
 
-  // Velocity changes per step: a hit at time t acts at the first step at or after t.
-  std::vector<Eigen::Vector3d> kicks(grid.size(), Eigen::Vector3d::Zero());
+  // Hits per step: a hit at time t acts at the first step at or after t.
+  std::vector<std::vector<const HitImpulse*>> kicks(grid.size());
   for (const HitImpulse& hit : hits) {
     if (!hitReaches(hit, setup, clip_name) || hit.direction.norm() == 0.0) continue;
     const int n = std::max(0, static_cast<int>(std::ceil((hit.time - t0) / h - 1e-9)));
-    if (n <= steps) kicks[n] += hit.magnitude * hit.direction.normalized();
+    if (n <= steps) kicks[n].push_back(&hit);
   }
-
-  // The distance limit and the cone, at step n: move p back and drop the outward part of the velocity
-  // relative to the target (an inelastic contact with the limit). Returns the offset in the frame.
-  auto constrain = [&](int n, Eigen::Vector3d& p, Eigen::Vector3d& v, const Eigen::Vector3d& target_velocity) {
-    const Eigen::Vector3d r = target(n);
-    Eigen::Vector3d offset = p - r;
-    const double distance = offset.norm();
-    if (distance > max_offset) {
-      const Eigen::Vector3d outward = offset / distance;
-      offset = outward * max_offset;
-      p = r + offset;
-      const double away = (v - target_velocity).dot(outward);
-      if (away > 0.0) v -= away * outward;
+  auto kick = [&](int n) {
+    for (const HitImpulse* hit : kicks[n]) {
+      const double direction[3] = {hit->direction.x(), hit->direction.y(), hit->direction.z()};
+      runtime::applyJiggleImpulse<double>(state, 0, direction, hit->magnitude);
     }
-    const Eigen::Quaterniond& rotation = grid[n].rotation;
-    Eigen::Vector3d local = rotation.conjugate() * offset;
-    const Eigen::Vector3d q = rest_point + local;
-    const Eigen::Vector3d clamped = clampToCone(setup, q);
-    if (clamped != q) {
-      local = clamped - rest_point;
-      p = r + rotation * local;
-      const Eigen::Vector3d normal = rotation * cone.normal(cone.coords(clamped));
-      if (normal.norm() > 0.0) {
-        const Eigen::Vector3d outward = normal.normalized();
-        const double away = (v - target_velocity).dot(outward);
-        if (away > 0.0) v -= away * outward;
-      }
-    }
-    return local;
   };
+  auto localOffset = [&]() -> Eigen::Vector3d { return Eigen::Vector3d::Map(state[0].local_offset); };
 
-  // Start at rest on the target, moving with it, so a clip that starts in motion does not kick.
+  // Start at rest on the target, moving with it, so a clip that starts in motion does not kick; the
+  // hits of step 0 act at the start.
   std::vector<Eigen::Vector3d> offsets(grid.size());
-  Eigen::Vector3d p = target(0);
-  Eigen::Vector3d v = (target(1) - target(0)) / h + kicks[0];
-  offsets[0] = constrain(0, p, v, (target(1) - target(0)) / h);
+  kick(0);
+  runtime::JiggleResetJob<double> reset;
+  reset.rig = &rig;
+  reset.joint_matrices = {grid[0].data(), grid[0].size()};
+  reset.velocity_matrices = {grid[1].data(), grid[1].size()};
+  reset.velocity_time = h;
+  reset.states = state;
+  [[maybe_unused]] const bool reset_ran = reset.Run();
+  assert(reset_ran);
+  offsets[0] = localOffset();
+  runtime::JiggleJob<double> job;
+  job.rig = &rig;
+  job.delta_time = h;
+  job.states = state;
   for (int n = 0; n < steps; ++n) {
-    // Semi-implicit Euler on x = p - r: the velocity first, then the position with the new velocity.
-    // Damping acts on the velocity relative to the target, so a body in uniform motion does not lag.
-    const Eigen::Vector3d r = target(n);
-    const Eigen::Vector3d target_velocity = (target(n + 1) - r) / h;
-    v += h * (-spring.k * (p - r) - spring.beta * (v - target_velocity));
-    p += h * v;
-    v += kicks[n + 1];
-    offsets[n + 1] = constrain(n + 1, p, v, target_velocity);
+    kick(n + 1);
+    job.joint_matrices = {grid[n + 1].data(), grid[n + 1].size()};
+    [[maybe_unused]] const bool ran = job.Run();
+    assert(ran && state[0].since_step == 0.0);
+    offsets[n + 1] = localOffset();
   }
 
   JiggleTrack track;
@@ -185,25 +182,23 @@ JiggleTrack simulate(const JiggleSetup& setup, const std::vector<double>& sample
   track.muscle = setup.muscle;
   track.times = sample_times;
   for (size_t i = 0; i < sample_times.size(); ++i) {
-    // The state between two steps, as the offset in the joint's frame (the cone is convex there, so
-    // the blend of two clamped offsets is inside it), put back on the exactly sampled animation.
     const double u = (sample_times[i] - t0) / h;
     const int n = std::min(std::max(static_cast<int>(std::floor(u)), 0), steps - 1);
     const double frac = std::min(std::max(u - n, 0.0), 1.0);
-    const Eigen::Vector3d offset = frac == 0.0 ? offsets[n] : frac == 1.0 ? offsets[n + 1]
-                                                                          : (1.0 - frac) * offsets[n] + frac * offsets[n + 1];
-    const Eigen::Vector3d q = clampToCone(setup, rest_point + offset);
-    const RigidFrame& frame = outputs[i].rigid;
-    const Eigen::Vector3d up = frame.rotation.conjugate() * (frame.root * setup.root_up);
+    double offset[3];
+    runtime::blendJiggleOffset(offsets[n].data(), offsets[n + 1].data(), frac, offset);
+    const double* matrices = outputs[i].matrices.data();
+    const runtime::JiggleOutput<double> out =
+        runtime::evaluateJiggle(settings, offset, matrices + 16 * kFramePivot, matrices + 16 * kFrameRoot);
     Trs local = outputs[i].local;
-    local.rotation = (local.rotation * aimRotation(setup, q, up)).normalized();
-    if (q == rest_point) local.rotation = outputs[i].local.rotation;  // exactly the animation at rest
+    const Eigen::Quaterniond correction(out.correction[3], out.correction[0], out.correction[1], out.correction[2]);
+    // Exactly the animation at rest.
+    if (!out.at_rest) local.rotation = (local.rotation * correction).normalized();
     track.local.push_back(local);
-    track.point.push_back(frame.translation + frame.rotation * q);
-    track.target.push_back(frame.translation + frame.rotation * rest_point);
-    const ConeAngle angle = coneAngle(setup, q);
-    track.angle_deg.push_back(angle.angle_deg);
-    track.clamp_deg.push_back(angle.clamp_deg);
+    track.point.push_back(Eigen::Vector3d::Map(out.point));
+    track.target.push_back(Eigen::Vector3d::Map(out.target));
+    track.angle_deg.push_back(out.angle_deg);
+    track.clamp_deg.push_back(out.clamp_deg);
   }
   return track;
 }
@@ -220,10 +215,8 @@ bool inRange(double value, double low, double high) { return std::isfinite(value
 }  // namespace
 
 SpringConstants springConstants(const JiggleParams& params) {
-  const double frequency = kMinJiggleHz * std::pow(kMaxJiggleHz / kMinJiggleHz, params.stiffness);
-  const double omega = 2.0 * kPi * frequency;
-  const double zeta = kMinDampingRatio + (1.0 - kMinDampingRatio) * params.damping;
-  return {omega * omega, 2.0 * zeta * omega};
+  const runtime::JiggleSpring spring = runtime::jiggleSpring(params.stiffness, params.damping);
+  return {spring.k, spring.beta};
 }
 
 std::string jiggleSetupProblem(const JiggleSetup& setup, const Skeleton& skeleton) {
@@ -246,91 +239,21 @@ std::string jiggleSetupProblem(const JiggleSetup& setup, const Skeleton& skeleto
 }
 
 Eigen::Vector3d clampToCone(const JiggleSetup& setup, const Eigen::Vector3d& q) {
-  const Cone cone(setup);
-  const Eigen::Vector3d c1 = cone.coords(q);
-  if (cone.inside(c1)) return q;
-  // The talk's segment from the rest point x0 = (0, L, 0), inside the cone, to q: f(t) = G(x0 + t d)
-  // = A t^2 + B t + C with C = G(x0) < 0, so the first root in (0, 1] is where it leaves the cone.
-  const double length = setup.length;
-  const Eigen::Vector3d d = c1 - Eigen::Vector3d(0.0, length, 0.0);
-  const double a = cone.gx * d.x() * d.x() + cone.gz * d.z() * d.z() - cone.gy * d.y() * d.y();
-  const double b = -2.0 * cone.gy * d.y() * length;
-  const double c = -cone.gy * length * length;
-  double t = -1.0;
-  auto consider = [&t](double root) {
-    if (std::isfinite(root) && root > 0.0 && root <= 1.0 && (t < 0.0 || root < t)) t = root;
-  };
-  if (std::abs(a) <= 1e-300) {
-    consider(-c / b);
-  } else {
-    const double discriminant = b * b - 4.0 * a * c;
-    if (discriminant >= 0.0) {
-      // Numerically stable roots (no cancellation between -b and the square root).
-      const double half = -0.5 * (b + std::copysign(std::sqrt(discriminant), b));
-      consider(half / a);
-      if (half != 0.0) consider(c / half);
-    }
-  }
-  const Eigen::Vector3d rest = length * setup.aim_axis;
-  auto insideAt = [&](double s) { return cone.inside(cone.coords(rest + s * (q - rest))); };
-  // The front nappe is convex, so the points of the segment inside it are one interval [0, t*]. The
-  // quadratic's root is t* up to rounding, which near a double root (a segment grazing a 90-degree
-  // cone's plane y = 0) is only sqrt(epsilon) accurate, or even lost to a slightly negative
-  // discriminant: bisect for the last inside t in a bracket around the root (or in [0, 1] without one),
-  // so the result is inside, on the surface to the last bit, and clamping it again changes nothing.
-  double inside = 0.0, outside = 1.0;
-  if (t > 0.0) {
-    const double low = t * (1.0 - 1e-6), high = std::min(1.0, t * (1.0 + 1e-6));
-    if (insideAt(low) && !insideAt(high)) {
-      inside = low;
-      outside = high;
-    }
-  }
-  for (int i = 0; i < 200; ++i) {
-    const double middle = 0.5 * (inside + outside);
-    if (middle <= inside || middle >= outside) break;
-    (insideAt(middle) ? inside : outside) = middle;
-  }
-  return rest + inside * (q - rest);
+  Eigen::Vector3d out;
+  runtime::clampJiggleToCone(jiggleRuntimeSettings(setup), q.data(), out.data());
+  return out;
 }
 
 ConeAngle coneAngle(const JiggleSetup& setup, const Eigen::Vector3d& q) {
-  const Cone cone(setup);
-  const Eigen::Vector3d c = cone.coords(q);
-  const double radial = std::hypot(c.x(), c.z());
   ConeAngle result;
-  result.angle_deg = std::atan2(radial, c.y()) / kDegree;
-  const double cos_phi = radial > 0.0 ? c.x() / radial : 1.0;
-  const double sin_phi = radial > 0.0 ? c.z() / radial : 0.0;
-  // tan(theta_c) = 1 / sqrt(cos^2 phi / tan^2 a + sin^2 phi / tan^2 b), times sin a sin b / (sin a sin b).
-  const double denominator = std::sqrt(cos_phi * cos_phi * cone.sb * cone.sb * cone.ca * cone.ca +
-                                       sin_phi * sin_phi * cone.sa * cone.sa * cone.cb * cone.cb);
-  result.clamp_deg = std::atan2(cone.sa * cone.sb, denominator) / kDegree;
+  runtime::jiggleConeAngle(jiggleRuntimeSettings(setup), q.data(), &result.angle_deg, &result.clamp_deg);
   return result;
 }
 
 Eigen::Quaterniond aimRotation(const JiggleSetup& setup, const Eigen::Vector3d& q, const Eigen::Vector3d& up) {
-  if (q == setup.length * setup.aim_axis || q.norm() == 0.0) return Eigen::Quaterniond::Identity();
-  const Eigen::Vector3d u = q.normalized();
-  const Eigen::Vector3d a = setup.aim_axis;
-  const Eigen::Vector3d up_unit = up.normalized();
-  const Eigen::Vector3d w_jiggle = u.cross(up_unit);
-  const Eigen::Vector3d w_rest = a.cross(up_unit);
-  if (w_jiggle.norm() < kAimDegenerateSin || w_rest.norm() < kAimDegenerateSin)
-    return Eigen::Quaterniond::FromTwoVectors(a, u);
-  // The talk's aim frame [u, v, w] with w = u x up, v = w x u, for the jiggle point and for the rest
-  // point; the jiggle rotation maps one onto the other.
-  auto frame = [&up_unit](const Eigen::Vector3d& aim) {
-    const Eigen::Vector3d w = aim.cross(up_unit).normalized();
-    const Eigen::Vector3d v = w.cross(aim);
-    Eigen::Matrix3d m;
-    m.col(0) = aim;
-    m.col(1) = v;
-    m.col(2) = w;
-    return m;
-  };
-  const Eigen::Matrix3d rotation = frame(u) * frame(a).transpose();
-  return Eigen::Quaterniond(rotation).normalized();
+  double rotation[4];
+  runtime::jiggleAimRotation(jiggleRuntimeSettings(setup), q.data(), up.data(), rotation);
+  return Eigen::Quaterniond(rotation[3], rotation[0], rotation[1], rotation[2]);
 }
 
 JiggleSetup makeJointJiggle(const Skeleton& skeleton, int joint, const JiggleParams& params, const Eigen::Vector3d& aim_axis,
@@ -405,14 +328,40 @@ std::vector<JiggleTrack> simulateJiggle(const Skeleton& skeleton, const Clip& cl
     auto rootWorld = [&](const Pose& pose) -> const Eigen::Affine3d& {
       return setup->root >= 0 ? pose.world[setup->root] : skeleton.root_parent_world[j];
     };
-    std::vector<RigidFrame> grid;
-    for (const Pose& pose : grid_poses) grid.push_back(rigidFrame(pose.world[j], rootWorld(pose)));
+    auto parentWorld = [&](const Pose& pose) -> const Eigen::Affine3d& {
+      return skeleton.parents[j] >= 0 ? pose.world[skeleton.parents[j]] : skeleton.root_parent_world[j];
+    };
+    std::vector<FrameMatrices> grid;
+    grid.reserve(grid_poses.size());
+    for (const Pose& pose : grid_poses) grid.push_back(frameMatrices(parentWorld(pose), pose.world[j], rootWorld(pose)));
     std::vector<OutputFrame> outputs;
-    for (const Pose& pose : output_poses) outputs.push_back({rigidFrame(pose.world[j], rootWorld(pose)), pose.local[j]});
+    for (const Pose& pose : output_poses)
+      outputs.push_back({frameMatrices(parentWorld(pose), pose.world[j], rootWorld(pose)), pose.local[j]});
     tracks.push_back(simulate(*setup, sample_times, grid, outputs, hits, clip.name));
   }
   return tracks;
 }
+
+template <typename Real>
+runtime::JiggleRig<Real> buildJiggleRig(const std::vector<JiggleSetup>& setups, const Skeleton& skeleton,
+                                        const std::vector<int>& carriers) {
+  runtime::JiggleRig<Real> rig;
+  rig.joint_count = skeleton.size() + static_cast<int>(carriers.size());
+  for (const JiggleSetup& setup : setups) {
+    assert(jiggleSetupProblem(setup, skeleton).empty());
+    const bool on_muscle = setup.host == JiggleHost::kMuscle;
+    assert(!on_muscle || setup.muscle < static_cast<int>(carriers.size()));
+    const int joint = on_muscle ? skeleton.size() + setup.muscle : setup.joint;
+    const int parent = on_muscle ? carriers[setup.muscle] : skeleton.parents[setup.joint];
+    const runtime::JiggleSpec<Real> spec = jiggleRuntimeSpec<Real>(setup, joint, parent, setup.root);
+    assert(runtime::jiggleSpecProblem(spec, rig.joint_count)[0] == '\0');
+    rig.jiggles.push_back(runtime::buildJiggleSettings(spec));
+  }
+  return rig;
+}
+
+template runtime::JiggleRig<float> buildJiggleRig(const std::vector<JiggleSetup>&, const Skeleton&, const std::vector<int>&);
+template runtime::JiggleRig<double> buildJiggleRig(const std::vector<JiggleSetup>&, const Skeleton&, const std::vector<int>&);
 
 std::vector<double> jiggleFrameTimes(const std::vector<double>& sample_times) {
   assert(!sample_times.empty());
@@ -438,16 +387,20 @@ JiggleTrack simulateJiggleFrames(const JiggleSetup& setup, const std::vector<dou
                                  const std::vector<HitImpulse>& hits, const std::string& clip_name) {
   assert(!sample_times.empty() && frames.size() == frame_times.size() && !frame_times.empty());
   assert(std::is_sorted(sample_times.begin(), sample_times.end()) && std::is_sorted(frame_times.begin(), frame_times.end()));
-  std::vector<OutputFrame> known;
-  for (const JiggleFrame& frame : frames)
-    known.push_back({rigidFrame(frame.pivot, frame.root), decomposeTrs(frame.parent.inverse() * frame.pivot)});
+  // The given frames: the runtime reads their matrices; their rigid parts drive the path between them.
+  std::vector<RigidFrame> known;
+  std::vector<OutputFrame> given;
+  for (const JiggleFrame& frame : frames) {
+    known.push_back(rigidFrame(frame.pivot, frame.root));
+    given.push_back({frameMatrices(frame.parent, frame.pivot, frame.root), decomposeTrs(frame.parent.inverse() * frame.pivot)});
+  }
   // Every sample time must be among the frame times (jiggleFrameTimes() guarantees it).
   std::vector<OutputFrame> outputs;
   size_t at = 0;
   for (double time : sample_times) {
     while (at + 1 < frame_times.size() && frame_times[at] < time - kFrameTimeTolerance) ++at;
     assert(std::abs(frame_times[at] - time) <= kFrameTimeTolerance);
-    outputs.push_back(known[at]);
+    outputs.push_back(given[at]);
   }
   // Between samples the animation is only known through the samples. A piecewise-linear path would
   // turn the target's acceleration into a train of impulses at the samples, which the spring rings
@@ -458,11 +411,11 @@ JiggleTrack simulateJiggleFrames(const JiggleSetup& setup, const std::vector<dou
   assert(frame_times.front() <= sample_times.front() + kFrameTimeTolerance);
   const int last = static_cast<int>(frame_times.size()) - 1;
   auto translationAt = [&](int k) -> Eigen::Vector4d {
-    const Eigen::Vector3d& t = known[k].rigid.translation;
+    const Eigen::Vector3d& t = known[k].translation;
     return {t.x(), t.y(), t.z(), 0.0};
   };
-  auto pivotAt = [&](int k) -> Eigen::Vector4d { return known[k].rigid.rotation.coeffs(); };
-  auto rootAt = [&](int k) -> Eigen::Vector4d { return known[k].rigid.root.coeffs(); };
+  auto pivotAt = [&](int k) -> Eigen::Vector4d { return known[k].rotation.coeffs(); };
+  auto rootAt = [&](int k) -> Eigen::Vector4d { return known[k].root.coeffs(); };
   auto hermite = [&](const std::function<Eigen::Vector4d(int)>& value, int k, double s, bool hemisphere) -> Eigen::Vector4d {
     const Eigen::Vector4d reference = value(k);
     auto aligned = [&](int index) -> Eigen::Vector4d {
@@ -481,29 +434,30 @@ JiggleTrack simulateJiggleFrames(const JiggleSetup& setup, const std::vector<dou
   auto same = [](const RigidFrame& a, const RigidFrame& b) {
     return a.translation == b.translation && a.rotation.coeffs() == b.rotation.coeffs() && a.root.coeffs() == b.root.coeffs();
   };
-  std::vector<RigidFrame> grid;
+  std::vector<FrameMatrices> grid;
+  grid.reserve(steps + 1);
   int k = 0;
   for (int n = 0; n <= steps; ++n) {
     const double time = sample_times.front() + n * kJiggleTimestep;
     while (k < last && frame_times[k + 1] <= time + kFrameTimeTolerance) ++k;
     // Past the last sample, and across repeated sample times, the pose is held.
     if (k >= last || std::abs(frame_times[k] - time) <= kFrameTimeTolerance) {
-      grid.push_back(known[k].rigid);
+      grid.push_back(given[k].matrices);
       continue;
     }
     // A held pose stays bit-exact, so a still jiggle stays exactly at rest.
     bool held = true;
-    for (int m = std::max(k - 1, 0); m <= std::min(k + 2, last); ++m) held = held && same(known[m].rigid, known[k].rigid);
+    for (int m = std::max(k - 1, 0); m <= std::min(k + 2, last); ++m) held = held && same(known[m], known[k]);
     if (held) {
-      grid.push_back(known[k].rigid);
+      grid.push_back(given[k].matrices);
       continue;
     }
     const double s = std::min(1.0, std::max(0.0, (time - frame_times[k]) / (frame_times[k + 1] - frame_times[k])));
-    RigidFrame blended;
-    blended.translation = hermite(translationAt, k, s, false).head<3>();
-    blended.rotation = Eigen::Quaterniond(hermite(pivotAt, k, s, true)).normalized();
-    blended.root = Eigen::Quaterniond(hermite(rootAt, k, s, true)).normalized();
-    grid.push_back(blended);
+    // The runtime reads only the rigid parts of the pivot and the root (and never the parent) to step.
+    const Eigen::Vector3d translation = hermite(translationAt, k, s, false).head<3>();
+    const Eigen::Quaterniond rotation = Eigen::Quaterniond(hermite(pivotAt, k, s, true)).normalized();
+    const Eigen::Quaterniond root = Eigen::Quaterniond(hermite(rootAt, k, s, true)).normalized();
+    grid.push_back(frameMatrices(frames[k].parent, Eigen::Translation3d(translation) * rotation, Eigen::Affine3d(root)));
   }
   return simulate(setup, sample_times, grid, outputs, hits, clip_name);
 }

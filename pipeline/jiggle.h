@@ -10,6 +10,11 @@
 // physical animation does ("simulated at a fixed frame time, regardless of the hardware"), so a clip
 // baked at 30, 60 or 120 fps gives the same motion. docs/jiggle.md gives every equation.
 //
+// The equations live in the engine-facing runtime (runtime/jiggle.h, the double instantiation): this
+// file resolves presets and hits by name, supplies the animation at every internal step, steps the
+// runtime's JiggleJob through it and evaluates the runtime's output at the sample times, so a bake and
+// a game run one implementation of the spring, the limits, the cone and the aim transformation.
+//
 // Plain functions over plain data: no I/O. Two hosts:
 //  - kSkeletonJoint: the jiggle sits on an existing skeleton joint; its baked rotation channel
 //    REPLACES that joint's animated rotation (translation and scale stay as animated). The jiggle
@@ -24,26 +29,25 @@
 #include <vector>
 
 #include "anatomy/character.h"
+#include "runtime/jiggle.h"
 
 namespace rigbake {
 
 struct LandmarkSet;
 struct MuscleSet;
 
-// The internal fixed step: 240 Hz keeps h * omega <= 0.32 at the stiffest spring (kMaxJiggleHz), well
-// inside semi-implicit Euler's stability region, and is a multiple of the usual 24/30/60/120 fps.
-constexpr double kJiggleTimestep = 1.0 / 240.0;
-// Stiffness 0..1 maps log-linearly onto the undamped natural frequency (docs/jiggle.md).
-constexpr double kMinJiggleHz = 1.0;
-constexpr double kMaxJiggleHz = 12.0;
-// Damping 0..1 maps linearly onto the damping ratio zeta in [kMinDampingRatio, 1] (critical): the
-// floor keeps damping 0 from ringing forever.
-constexpr double kMinDampingRatio = 0.02;
-// Cone half-angles below this are raised to it: a zero-angle elliptical cone is degenerate.
-constexpr double kMinClampDeg = 0.01;
-// Distance limit of the jiggle point to its target, in jiggle lengths (Respawn's linear limit to the
-// animation target): 1.5 > sqrt(2) still lets a 90-degree cone reach its rim.
-constexpr double kMaxJiggleOffset = 1.5;
+// The constants of the runtime jiggle (runtime/jiggle.h), which computes every jiggle the bake writes:
+// the internal fixed step (240 Hz: h * omega <= 0.32 at the stiffest spring, a multiple of the usual
+// 24/30/60/120 fps), stiffness 0..1 log-linearly onto 1..12 Hz, damping 0..1 linearly onto the damping
+// ratio [0.02, 1] (the floor keeps damping 0 from ringing forever), the smallest cone half-angle, and
+// the distance limit to the target in jiggle lengths (1.5 > sqrt(2) still lets a 90-degree cone reach
+// its rim). docs/jiggle.md.
+constexpr double kJiggleTimestep = runtime::kJiggleStepSeconds;
+constexpr double kMinJiggleHz = runtime::kJiggleMinHz;
+constexpr double kMaxJiggleHz = runtime::kJiggleMaxHz;
+constexpr double kMinDampingRatio = runtime::kJiggleMinDampingRatio;
+constexpr double kMinClampDeg = runtime::kJiggleMinClampDeg;
+constexpr double kMaxJiggleOffset = runtime::kJiggleMaxOffset;
 
 // The talk's attributes.
 struct JiggleParams {
@@ -164,6 +168,16 @@ ConeAngle coneAngle(const JiggleSetup& setup, const Eigen::Vector3d& q);
 // transformation with the root's up axis `up`, also in that frame). Identity when q is exactly
 // length * aim_axis.
 Eigen::Quaterniond aimRotation(const JiggleSetup& setup, const Eigen::Vector3d& q, const Eigen::Vector3d& up);
+
+// The runtime rig of `setups` (all of them, in order) for an engine's joint matrices laid out as the
+// skeleton's joints (0 .. skeleton.size() - 1) followed by the muscle rig's skinned joints (muscle m at
+// skeleton.size() + m, as runtime::MuscleRigJob writes them): joint_count = skeleton.size() +
+// muscle_count. A skeleton joint jiggle's parent is its skeleton parent (-1 at a root: model space); a
+// muscle jiggle's parent is `carriers[m]`, the joint its skinned joint rides (muscleCarrierJoint). Every
+// setup must pass jiggleSetupProblem().
+template <typename Real>
+runtime::JiggleRig<Real> buildJiggleRig(const std::vector<JiggleSetup>& setups, const Skeleton& skeleton,
+                                        const std::vector<int>& carriers);
 
 // The target names a preset jiggle can give, resolved by resolveJiggles.
 struct JigglePresetEntry {
