@@ -16,6 +16,7 @@ export const INFLUENCE_COUNTS = [4, 7, 10];
 const _matrix = new THREE.Matrix4();
 const _position = new THREE.Vector3();
 const _quaternion = new THREE.Quaternion();
+const _rotation = new THREE.Quaternion();
 const _scale = new THREE.Vector3();
 
 // The glTF node index of every object GLTFLoader made for a node.
@@ -335,7 +336,8 @@ export class RigbakePlayer {
         _matrix.fromArray(local).premultiply(entry.carrier.matrixWorld);
         entry.node.matrix.copy(entry.node.parent.matrixWorld).invert().multiply(_matrix);
       }
-      entry.node.matrix.decompose(entry.node.position, entry.node.quaternion, entry.node.scale);
+      // Only the matrix: position, quaternion and scale stay the mixer's (three's PropertyMixer writes
+      // a value only when it changed, so overwriting them here would leave sampled mode showing these).
       entry.node.updateMatrixWorld(true);
     }
   }
@@ -363,9 +365,9 @@ export class RigbakePlayer {
       _quaternion.set(d[0], d[1], d[2], d[3]);
       if (jiggle.muscle) {
         // R_baked = R_animated * D on the muscle joint's local T R S.
-        jiggle.node.matrix.decompose(_position, jiggle.node.quaternion, _scale);
-        jiggle.node.quaternion.multiply(_quaternion);
-        jiggle.node.matrix.compose(_position, jiggle.node.quaternion, _scale);
+        jiggle.node.matrix.decompose(_position, _rotation, _scale);
+        _rotation.multiply(_quaternion);
+        jiggle.node.matrix.compose(_position, _rotation, _scale);
       } else {
         jiggle.node.quaternion.multiply(_quaternion);
         jiggle.node.updateMatrix();

@@ -208,6 +208,52 @@ function compareSkinning(player, reference) {
   return out;
 }
 
+// A `both` bake: at the clips' own key times the file's sampled channels (sampled mode) must put the
+// skinned joints where the JavaScript runtime does (the bake sampled them through the C++ runtime).
+// Joints a jiggle moves are left out: their channels hold the baked jiggle on top.
+function sampledAgainstRuntime(player) {
+  const modes = player.availableMuscleModes();
+  if (!modes.includes('runtime') || !modes.includes('sampled')) return null;
+  const jiggling = new Set(player.jiggles.map((j) => j.node));
+  const out = { frames: 0, compared: 0, translation_m: 0, linear: 0 };
+  for (const clip of player.clips) {
+    const times = clip.clip.tracks.length ? clip.clip.tracks[0].times : [];
+    for (const q of [0.25, 0.5, 0.75]) {
+      if (!times.length) break;
+      const time = times[Math.min(times.length - 1, Math.floor(q * (times.length - 1)))];
+      player.setMuscleMode('runtime');
+      player.selectClip(clip.index);
+      player.seek(time);
+      const runtime = player.lastEvaluation.map((e) => e.skinned);
+      player.setMuscleMode('sampled');
+      player.seek(time);
+      player.muscles.forEach((entry, m) => {
+        if (jiggling.has(entry.node)) return;
+        const sampled = entry.node.matrixWorld.elements;
+        for (let k = 0; k < 16; ++k) {
+          const key = k >= 12 ? 'translation_m' : 'linear';
+          out[key] = Math.max(out[key], Math.abs(sampled[k] - runtime[m][k]));
+        }
+        ++out.compared;
+      });
+      ++out.frames;
+    }
+  }
+  player.setMuscleMode('runtime');
+  return out;
+}
+
+// What one frame of the JavaScript runtime costs: every muscle evaluated and its node set (the pose
+// stays), microseconds per frame over 200 frames.
+function runtimeCost(player) {
+  if (!player.availableMuscleModes().includes('runtime')) return null;
+  player.setMuscleMode('runtime');
+  const frames = 200;
+  const t0 = performance.now();
+  for (let f = 0; f < frames; ++f) player.applyMuscles();
+  return { muscles: player.muscles.length, us_per_frame: ((performance.now() - t0) * 1000) / frames };
+}
+
 export async function runSelfTest(player, reference, loadError = null) {
   const started = performance.now();
   const result = { done: false, loaded: !!player && !loadError, errors: captured.errors, warnings: captured.warnings };
@@ -248,6 +294,8 @@ export async function runSelfTest(player, reference, loadError = null) {
     stage('clips', () => playEveryClip(player));
     stage('modes', () => everyMode(player));
     stage('hit', () => hitTest(player));
+    stage('runtime', () => runtimeCost(player));
+    stage('sampled', () => sampledAgainstRuntime(player));
     if (reference) {
       stage('matrices', () => compareMatrices(player, reference));
       stage('skinning', () => compareSkinning(player, reference));
