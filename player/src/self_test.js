@@ -137,7 +137,7 @@ function angleDifference(a, b) {
 
 // The JavaScript runtime against the C++ runtime's matrices at the reference's times.
 function compareMatrices(player, reference) {
-  const out = { frames: 0, muscles: player.muscles.length, translation_m: 0, linear: 0, ratio: 0, twist_rad: 0, helpers_m: 0, worst: '' };
+  const out = { frames: 0, muscles: player.muscles.length, translation_m: 0, linear: 0, ratio: 0, twist_rad: 0, helpers_m: 0, helpers_compared: 0, worst: '' };
   player.setMuscleMode('runtime');
   player.jigglesEnabled = false;
   for (const clip of reference.clips) {
@@ -160,6 +160,7 @@ function compareMatrices(player, reference) {
         out.twist_rad = Math.max(out.twist_rad, angleDifference(result.drivers.twist, clip.drivers[i][2 * m + 1]));
         if (clip.helpers && result.helpers) {
           for (let k = 0; k < 48; ++k) out.helpers_m = Math.max(out.helpers_m, Math.abs(result.helpers[k] - clip.helpers[i][48 * m + k]));
+          ++out.helpers_compared;
         }
       });
       ++out.frames;
@@ -256,7 +257,7 @@ function runtimeCost(player) {
 
 export async function runSelfTest(player, reference, loadError = null) {
   const started = performance.now();
-  const result = { done: false, loaded: !!player && !loadError, errors: captured.errors, warnings: captured.warnings };
+  const result = { done: false, loaded: !!player && !loadError, errors: captured.errors, warnings: captured.warnings, seconds: {} };
   const stage = (name, run) => {
     const t0 = performance.now();
     try {
@@ -264,7 +265,6 @@ export async function runSelfTest(player, reference, loadError = null) {
     } catch (error) {
       captured.errors.push(`${name}: ${error.name}: ${error.message}`);
     }
-    result.seconds = result.seconds || {};
     result.seconds[name] = (performance.now() - t0) / 1000;
   };
   if (player && !loadError) {
@@ -279,6 +279,9 @@ export async function runSelfTest(player, reference, loadError = null) {
       };
       player.start();
     });
+    // The page's load time: from the navigation's start (performance's time origin) to the second frame
+    // on screen, i.e. the scripts parsed, the base64 GLB decoded and loaded, the shaders compiled.
+    result.seconds.load = performance.now() / 1000;
     player.stop();
     player.playing = false;
     result.file = {
@@ -301,7 +304,6 @@ export async function runSelfTest(player, reference, loadError = null) {
       stage('skinning', () => compareSkinning(player, reference));
     }
   }
-  result.seconds = result.seconds || {};
   result.seconds.total = (performance.now() - started) / 1000;
   result.done = true;
   const pre = document.createElement('pre');
