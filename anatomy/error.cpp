@@ -30,6 +30,9 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"ROM_CLIP_UNKNOWN", ExitCode::kInvalidInput, "--clips names a clip the ROM preset does not have."},
       {"ROM_CLIP_UNAVAILABLE", ExitCode::kInvalidInput, "A ROM clip needs a landmark or joint the character lacks (no legs, no neck joint), or no ROM clip fits it at all."},
       {"ROM_CLIP_EXISTS", ExitCode::kInvalidInput, "The character already has an animation with a ROM clip's name (it is a ROM output already)."},
+      {"VIEW_PLAYER_MISSING", ExitCode::kIo, "rigbake view cannot find the bundled player script (scripts/install-player.sh builds it)."},
+      {"VIEW_NOT_BAKED", ExitCode::kInvalidInput, "rigbake view was given a file that is not a rigbake bake (no rig extension, muscle joints or packed influences)."},
+      {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

@@ -19,5 +19,6 @@ void addValidateCommand(CLI::App& app, Runner* runner);
 void addRetargetCommand(CLI::App& app, Runner* runner);
 void addBuildCommand(CLI::App& app, Runner* runner);
 void addRomCommand(CLI::App& app, Runner* runner);
+void addViewCommand(CLI::App& app, Runner* runner);
 
 }  // namespace rigbake::cli

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   rigbake::cli::addRetargetCommand(app, &runner);
   rigbake::cli::addBuildCommand(app, &runner);
   rigbake::cli::addRomCommand(app, &runner);
+  rigbake::cli::addViewCommand(app, &runner);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -29,3 +29,4 @@ fi
 
 bash "$repo/scripts/install-validator.sh"
 bash "$repo/scripts/install-gltf-transform.sh"
+bash "$repo/scripts/install-player.sh"

@@ -1,15 +1,33 @@
 #!/usr/bin/python3
 """Every shipped preset passes its JSON Schema, and the schemas reject a broken preset.
 
-Usage: check_preset_schemas.py REPO_DIR. Uses Debian's python3-jsonschema (Draft 2020-12)."""
+Usage: check_preset_schemas.py REPO_DIR [RIGBAKE_CLI]. With the CLI, it also bakes the sample character
+(muscles, helper joints, jiggles: every part of the extension) and checks the baked file's
+RIGBAKE_muscle_rig extension against presets/schemas/RIGBAKE_muscle_rig.schema.json. Uses Debian's
+python3-jsonschema (Draft 2020-12)."""
 import copy
 import json
 import pathlib
+import struct
+import subprocess
 import sys
+import tempfile
 
 import jsonschema
 
-def main(repo: pathlib.Path) -> int:
+def baked_extension(cli: str) -> dict:
+    """The RIGBAKE_muscle_rig extension of the sample character baked by the CLI (a GLB's JSON chunk)."""
+    with tempfile.TemporaryDirectory() as work:
+        sample, baked = f"{work}/sample.glb", f"{work}/baked.glb"
+        subprocess.run([cli, "sample", "-o", sample], check=True, capture_output=True)
+        subprocess.run([cli, "bake", sample, "--helper-joints", "--jiggle", "biceps", "-o", baked], check=True,
+                       capture_output=True)
+        data = pathlib.Path(baked).read_bytes()
+    length, kind = struct.unpack_from("<II", data, 12)
+    assert kind == 0x4E4F534A, "the first GLB chunk is not JSON"
+    return json.loads(data[20:20 + length])["extensions"]["RIGBAKE_muscle_rig"]
+
+def main(repo: pathlib.Path, cli: str = "") -> int:
     schemas_dir = repo / "presets" / "schemas"
     schemas = {p.name: json.loads(p.read_text()) for p in schemas_dir.glob("*.schema.json")}
     def validator(name):
@@ -52,6 +70,24 @@ def main(repo: pathlib.Path) -> int:
                  ("jiggle_preset.schema.json", "typo'd jiggle key", broken_jiggle),
                  ("rom_preset.schema.json", "typo'd ROM clip key", broken_rom),
                  ("rom_preset.schema.json", "ROM joint with a side suffix", sided_rom)]
+    if cli:
+        extension = baked_extension(cli)
+        errors = list(validator("RIGBAKE_muscle_rig.schema.json").iter_errors(extension))
+        for error in errors:
+            print(f"baked sample#/extensions/RIGBAKE_muscle_rig/{'/'.join(map(str, error.absolute_path))}: {error.message}")
+        covered = bool(extension.get("jiggles")) and all("helperNodes" in m for m in extension["muscles"])
+        print(f"{'FAIL' if errors or not covered else 'ok  '} the baked sample's RIGBAKE_muscle_rig "
+              f"({len(extension['muscles'])} muscles, {len(extension.get('jiggles', []))} jiggles) against RIGBAKE_muscle_rig.schema.json")
+        checks.append(("RIGBAKE_muscle_rig.schema.json", "baked sample"))
+        failures += bool(errors) or not covered
+        broken_rig = copy.deepcopy(extension)
+        broken_rig["muscles"][0]["restLenght"] = broken_rig["muscles"][0].pop("restLength")
+        negative_rig = copy.deepcopy(extension)
+        negative_rig["muscles"][0]["compression"] = 1.5
+        negatives += [("RIGBAKE_muscle_rig.schema.json", "muscle with a typo'd key", broken_rig),
+                      ("RIGBAKE_muscle_rig.schema.json", "muscle whose compression is above 1", negative_rig)]
+    else:
+        print("note: no RIGBAKE_CLI argument, the baked extension is not checked")
     for schema, label, document in negatives:
         rejected = not validator(schema).is_valid(document)
         print(f"{'ok  ' if rejected else 'FAIL'} schema rejects a {label}")
@@ -60,4 +96,4 @@ def main(repo: pathlib.Path) -> int:
     return 1 if failures else 0
 
 if __name__ == "__main__":
-    sys.exit(main(pathlib.Path(sys.argv[1])))
+    sys.exit(main(pathlib.Path(sys.argv[1]), sys.argv[2] if len(sys.argv) > 2 else ""))

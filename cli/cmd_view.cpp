@@ -1,0 +1,150 @@
+// `rigbake view baked.glb -o DIR`: a page that plays a baked character in the browser with the rigbake
+// player (player/, docs/view.md): the muscles evaluated live by the runtime's equations in JavaScript,
+// 4, 7 or 10 influences skinned from the packed attributes, the heatmap and the jiggles' hit button.
+// Works from file:// with no server and no network.
+#include <tiny_gltf.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+
+#include "anatomy/error.h"
+#include "cli/commands.h"
+#include "cli/common.h"
+#include "formats/atomic_file.h"
+#include "formats/baked_gltf.h"
+#include "formats/gltf_write.h"
+#include "formats/view_page.h"
+
+namespace rigbake::cli {
+namespace {
+
+struct ViewCommandOptions {
+  std::string baked;
+  std::string output;
+  std::string player;
+  bool json = false;
+};
+
+// The bundle scripts/install-player.sh builds, beside the source tree's presets (as the presets are
+// found): RIGBAKE_DEFAULT_PRESET_DIR is <source>/presets.
+std::string defaultPlayerBundle() {
+  if (const char* env = std::getenv("RIGBAKE_PLAYER")) return env;
+  return (std::filesystem::path(RIGBAKE_DEFAULT_PRESET_DIR).parent_path() / ".tools" / "player" / kViewPlayerFile).string();
+}
+
+std::string readPlayerBundle(const std::string& path) {
+  std::string bundle;
+  try {
+    bundle = readFile(path);
+  } catch (const Error&) {
+    fail("VIEW_PLAYER_MISSING", path,
+         "the bundled player is not there: run scripts/install-player.sh (it installs three.js and esbuild from "
+         "player/package-lock.json and builds the bundle), or pass --player FILE");
+  }
+  if (bundle.find("RigbakePlayer") == std::string::npos)
+    fail("VIEW_PLAYER_MISSING", path, "is not the rigbake player bundle (no RigbakePlayer in it): run scripts/install-player.sh");
+  return bundle;
+}
+
+// What would break the player: a malformed rig extension, packed attributes that do not decode.
+void checkViewable(const std::string& path, const Character& character, const tinygltf::Model& model,
+                   const BakedFileData& file) {
+  if (!file.rig.problems.empty()) {
+    std::string list;
+    for (size_t k = 0; k < file.rig.problems.size() && k < 3; ++k) list += (k ? "; " : "") + file.rig.problems[k];
+    fail("VIEW_BAKE_INVALID", path, "its RIGBAKE_muscle_rig extension cannot be evaluated: " + list);
+  }
+  for (const FileSkinAttributes& skin : file.skins) {
+    if (skin.mesh_part < 0 || skin.mesh_part >= static_cast<int>(character.meshes.size())) continue;
+    const int mesh = character.meshes[skin.mesh_part].gltf_mesh;
+    const int primitive = character.meshes[skin.mesh_part].gltf_primitive;
+    if (mesh < 0 || mesh >= static_cast<int>(model.meshes.size()) || primitive < 0 ||
+        primitive >= static_cast<int>(model.meshes[mesh].primitives.size()))
+      continue;
+    bool carries = false;
+    for (const auto& [semantic, accessor] : model.meshes[mesh].primitives[primitive].attributes)
+      carries |= semantic.rfind("_RIGBAKE_PACKED_", 0) == 0;
+    if (carries && !skin.has_packed)
+      fail("VIEW_BAKE_INVALID", path + "#" + skin.pointer,
+           "its _RIGBAKE_PACKED_* attributes do not decode as docs/packed-influences.md lays them out");
+  }
+  bool baked = file.rig.present || !file.muscle_nodes.empty();
+  for (const FileSkinAttributes& skin : file.skins) baked |= skin.has_packed;
+  if (!baked)
+    fail("VIEW_NOT_BAKED", path,
+         "has no RIGBAKE_muscle_rig extension, no muscle joints and no packed influences: it is not a rigbake bake. "
+         "Bake it first (rigbake bake " + fileNameOf(path) + " -o baked.glb), then view baked.glb");
+}
+
+int run(const ViewCommandOptions& options) {
+  const std::string player_path = options.player.empty() ? defaultPlayerBundle() : options.player;
+  const std::string bundle = readPlayerBundle(player_path);
+  LoadedCharacter loaded = loadCharacter(options.baked);
+  const BakedFileData file = readBakedFileData(loaded);
+  const tinygltf::Model& model = modelOf(*loaded.document);
+  checkViewable(options.baked, loaded.character, model, file);
+  // A GLB (or VRM) goes in byte for byte; a .gltf with its buffers and images beside it becomes one GLB.
+  const std::string glb = isBinaryGltfPath(options.baked) ? readFile(options.baked) : serializeGltf(model, true);
+  const auto files = viewPageFiles(fileNameOf(options.baked), glb, bundle);
+  writeViewDirectory(options.output, files);
+
+  long long page_bytes = 0;
+  for (const auto& entry : files) page_bytes += static_cast<long long>(entry.second.size());
+  int packed = 0;
+  for (const FileSkinAttributes& skin : file.skins) packed = std::max(packed, skin.has_packed ? skin.packed.influences : 0);
+  if (options.json) {
+    nlohmann::json files_json = nlohmann::json::object();
+    for (const auto& [name, bytes] : files) files_json[name] = bytes.size();
+    std::cout << nlohmann::json({{"input", fileNameOf(options.baked)},
+                                 {"output", options.output},
+                                 {"files", files_json},
+                                 {"page_bytes", page_bytes},
+                                 {"clips", loaded.character.clips.size()},
+                                 {"muscles", file.rig.present ? file.rig.names.size() : 0},
+                                 {"rig_extension", file.rig.present},
+                                 {"packed_influences", packed}})
+                     .dump(2)
+              << "\n";
+  }
+  std::cerr << std::fixed << std::setprecision(1) << "wrote " << (std::filesystem::path(options.output) / kViewPageFile).string()
+            << ": " << loaded.character.clips.size() << " clips, "
+            << (file.rig.present ? std::to_string(file.rig.names.size()) + " muscles evaluated live" : std::string("no rig extension"))
+            << ", " << (packed ? std::to_string(packed) + " packed influences" : std::string("no packed influences")) << ", "
+            << page_bytes / 1.0e6 << " MB in all; open it in a browser (file:// works, no server needed)\n";
+  return 0;
+}
+
+}  // namespace
+
+void addViewCommand(CLI::App& app, Runner* runner) {
+  auto options = std::make_shared<ViewCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "view",
+      "Write a page that plays a baked character in the browser (three.js, WebGL 2), from file:// with no server and "
+      "no network: every clip (a selector), the muscles evaluated live from the skeleton by the RIGBAKE_muscle_rig "
+      "equations in JavaScript (runtime), played from the file's channels (sampled) or left at rest (off: the input's "
+      "own skinning), 4 influences (three.js's own skinning of JOINTS_0/WEIGHTS_0) or 7 / 10 from the packed 0.001 "
+      "weights in the player's shader, a heatmap of how far the muscles move the skin against plain skinning, and a "
+      "Hit button that kicks the live jiggles. DIR gets index.html, rigbake-player.js (the player and three.js in one "
+      "script, built by scripts/install-player.sh) and model.js (the GLB as base64); open DIR/index.html. The same "
+      "input gives the same bytes. docs/view.md says what the page shows.\n\n"
+      "Example:\n"
+      "  rigbake bake hero.glb --influences 10 --muscle-motion both --jiggle biceps -o baked.glb\n"
+      "  rigbake view baked.glb -o baked-view\n"
+      "  chromium baked-view/index.html");
+  command->add_option("baked", options->baked, "Baked glTF (.glb, .vrm or .gltf) from `rigbake bake`")->required();
+  command->add_option("-o,--output", options->output,
+                      "Directory to write the page into; created, or replaced when it holds a page rigbake view wrote "
+                      "before (anything else in it is an error)")
+      ->required();
+  command->add_option("--player", options->player,
+                      "The player bundle to copy (default: $RIGBAKE_PLAYER, else .tools/player/rigbake-player.js of the "
+                      "source tree, which scripts/install-player.sh builds)");
+  command->add_flag("--json", options->json, "Print what was written as JSON on stdout (files and bytes, clips, muscles)");
+  command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
+}
+
+}  // namespace rigbake::cli

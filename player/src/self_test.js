@@ -1,0 +1,314 @@
+// The page's self-test (index.html?test=1), for tests/view_test.cpp in headless Chromium. It drives
+// the page through its own controls, plays every clip, tries every muscle mode, influence count and
+// the heatmap, kicks the jiggles, and, when the test handed it a reference (window.RIGBAKE_REFERENCE,
+// computed by rigbake's C++ runtime and skinning), compares the JavaScript runtime's muscle matrices
+// and the GPU-skinned positions with it. The result is JSON in <pre id="rigbake-test-result">.
+
+import { INFLUENCE_COUNTS } from './player.js';
+import { readBackSkinning } from './skinning.js';
+
+const captured = { errors: [], warnings: [] };
+
+// Records console errors and warnings and uncaught errors before anything else runs.
+export function installErrorCapture() {
+  for (const [level, list] of [['error', captured.errors], ['warn', captured.warnings]]) {
+    const original = console[level].bind(console);
+    console[level] = (...args) => {
+      list.push(args.map((a) => (a instanceof Error ? `${a.name}: ${a.message}` : String(a))).join(' '));
+      original(...args);
+    };
+  }
+  window.addEventListener('error', (event) => captured.errors.push(`uncaught: ${event.message}`));
+  window.addEventListener('unhandledrejection', (event) => captured.errors.push(`unhandled rejection: ${event.reason}`));
+}
+
+function decodeFloat64(base64) {
+  const binary = atob(base64);
+  const bytes = new Uint8Array(binary.length);
+  for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
+  return new Float64Array(bytes.buffer);
+}
+
+const click = (id) => document.getElementById(id).click();
+function choose(id, value) {
+  const select = document.getElementById(id);
+  select.value = String(value);
+  select.dispatchEvent(new Event('change'));
+}
+
+// Pixels that differ from the background: the character is on screen.
+function visiblePixels(player) {
+  const gl = player.renderer.getContext();
+  const width = gl.drawingBufferWidth;
+  const height = gl.drawingBufferHeight;
+  const pixels = new Uint8Array(width * height * 4);
+  gl.readPixels(0, 0, width, height, gl.RGBA, gl.UNSIGNED_BYTE, pixels);
+  let background = [pixels[0], pixels[1], pixels[2]];
+  let count = 0;
+  for (let i = 0; i < pixels.length; i += 4) {
+    if (Math.abs(pixels[i] - background[0]) + Math.abs(pixels[i + 1] - background[1]) + Math.abs(pixels[i + 2] - background[2]) > 24) ++count;
+  }
+  return count;
+}
+
+function glError(player) {
+  const gl = player.renderer.getContext();
+  return gl.getError();
+}
+
+// Plays every clip from its start through its end by the page's clip selector.
+function playEveryClip(player) {
+  const clips = [];
+  for (const clip of player.clips) {
+    choose('rb-clip', clip.index);
+    const frames = Math.max(4, Math.ceil(clip.duration * 15));
+    const dt = clip.duration / frames;
+    let maxTime = 0;
+    for (let f = 0; f < frames; ++f) {
+      player.advance(dt);
+      maxTime = Math.max(maxTime, player.time);
+      if (f % 4 === 0 || f === frames - 1) player.render();
+    }
+    clips.push({ index: clip.index, name: clip.name, duration: clip.duration, frames, maxTime, visible: visiblePixels(player), glError: glError(player) });
+  }
+  return clips;
+}
+
+// Every muscle mode x influence count x heatmap, through the page's controls.
+function everyMode(player) {
+  const modes = [];
+  for (const mode of player.availableMuscleModes()) {
+    click(`rb-muscles-${mode}`);
+    for (const influences of INFLUENCE_COUNTS) {
+      if (!player.availableInfluences().includes(influences)) continue;
+      click(`rb-influences-${influences}`);
+      for (const heatmap of [false, true]) {
+        const box = document.getElementById('rb-heatmap');
+        if (box.checked !== heatmap) box.click();
+        player.advance(1 / 30);
+        player.render();
+        modes.push({
+          mode,
+          influences,
+          heatmap,
+          applied: player.muscleMode === mode && player.influences === influences && player.heatmap === heatmap,
+          visible: visiblePixels(player),
+          glError: glError(player),
+        });
+      }
+    }
+  }
+  const box = document.getElementById('rb-heatmap');
+  if (box.checked) box.click();
+  return modes;
+}
+
+// The hit button: jiggle points swing out and settle again.
+function hitTest(player) {
+  if (!player.jiggles.length || !player.availableMuscleModes().includes('runtime')) return null;
+  click('rb-muscles-runtime');
+  choose('rb-clip', 0);
+  player.playing = false;
+  const magnitude = () => Math.max(...player.jiggles.map((j) => (j.lastOffset ? Math.hypot(...j.lastOffset) : 0)));
+  for (let f = 0; f < 10; ++f) player.advance(1 / 60);
+  const before = magnitude();
+  click('rb-hit');
+  let peak = 0;
+  for (let f = 0; f < 30; ++f) {
+    player.advance(1 / 60);
+    peak = Math.max(peak, magnitude());
+  }
+  player.render();
+  // Stand still for 6 s: the clip paused at its time, the jiggle must come back to rest.
+  const time = player.time;
+  for (let f = 0; f < 360; ++f) {
+    player.mixer.setTime(time);
+    player.frame(1 / 60);
+  }
+  return { jiggles: player.jiggles.length, before_m: before, peak_m: peak, settled_m: magnitude(), glError: glError(player) };
+}
+
+function angleDifference(a, b) {
+  let d = a - b;
+  while (d > Math.PI) d -= 2 * Math.PI;
+  while (d <= -Math.PI) d += 2 * Math.PI;
+  return Math.abs(d);
+}
+
+// The JavaScript runtime against the C++ runtime's matrices at the reference's times.
+function compareMatrices(player, reference) {
+  const out = { frames: 0, muscles: player.muscles.length, translation_m: 0, linear: 0, ratio: 0, twist_rad: 0, helpers_m: 0, helpers_compared: 0, worst: '' };
+  player.setMuscleMode('runtime');
+  player.jigglesEnabled = false;
+  for (const clip of reference.clips) {
+    player.selectClip(clip.animation);
+    clip.times.forEach((time, i) => {
+      player.seek(time);
+      const evaluation = player.lastEvaluation;
+      if (evaluation.length * 16 !== clip.skinned[i].length) throw new Error(`reference has ${clip.skinned[i].length / 16} muscles, the page ${evaluation.length}`);
+      evaluation.forEach((result, m) => {
+        const cpp = clip.skinned[i];
+        for (let k = 0; k < 16; ++k) {
+          const d = Math.abs(result.skinned[k] - cpp[16 * m + k]);
+          const key = k >= 12 ? 'translation_m' : 'linear';
+          if (d > out[key]) {
+            out[key] = d;
+            if (d > 1e-9) out.worst = `${clip.name} t=${time} ${player.muscles[m].name} element ${k}: ${result.skinned[k]} vs ${cpp[16 * m + k]}`;
+          }
+        }
+        out.ratio = Math.max(out.ratio, Math.abs(result.drivers.ratio - clip.drivers[i][2 * m]));
+        out.twist_rad = Math.max(out.twist_rad, angleDifference(result.drivers.twist, clip.drivers[i][2 * m + 1]));
+        if (clip.helpers && result.helpers) {
+          for (let k = 0; k < 48; ++k) out.helpers_m = Math.max(out.helpers_m, Math.abs(result.helpers[k] - clip.helpers[i][48 * m + k]));
+          ++out.helpers_compared;
+        }
+      });
+      ++out.frames;
+    });
+  }
+  player.jigglesEnabled = true;
+  return out;
+}
+
+// The GPU's skinning (the player's shader, read back by transform feedback) against rigbake's own
+// skinning with the packed 0.001 weights.
+function compareSkinning(player, reference) {
+  const out = { frames: 0, vertices: 0, max_m: 0, worst: '' };
+  if (!reference.skin || !reference.skin.length) return out;
+  const gl = document.createElement('canvas').getContext('webgl2');
+  if (!gl) throw new Error('no WebGL2 context for the skinning read-back');
+  player.setMuscleMode('runtime');
+  player.jigglesEnabled = false;
+  for (const frame of reference.skin) {
+    player.selectClip(frame.animation);
+    player.seek(frame.time);
+    for (const part of frame.parts) {
+      const state = player.skinnedMeshes.find((s) => s.source.mesh === part.mesh && s.source.primitive === part.primitive && s.source.node === part.node);
+      if (!state) throw new Error(`no skinned mesh for node ${part.node} mesh ${part.mesh} primitive ${part.primitive}`);
+      if (!state.layout) throw new Error(`mesh ${part.mesh} has no packed influences`);
+      const skeleton = state.mesh.skeleton;
+      skeleton.update();
+      const size = Math.max(4, Math.ceil(Math.sqrt(skeleton.bones.length * 4) / 4) * 4);
+      const bones = new Float32Array(size * size * 4);
+      bones.set(skeleton.boneMatrices.subarray(0, skeleton.bones.length * 16));
+      const gpu = readBackSkinning(gl, state.mesh, bones, state.layout.influences);
+      const cpp = decodeFloat64(part.positions);
+      if (cpp.length !== gpu.length) throw new Error(`mesh ${part.mesh}: ${gpu.length / 3} vertices in the page, ${cpp.length / 3} in the reference`);
+      for (let i = 0; i < gpu.length; ++i) {
+        const d = Math.abs(gpu[i] - cpp[i]);
+        if (d > out.max_m) {
+          out.max_m = d;
+          out.worst = `animation ${frame.animation} t=${frame.time} mesh ${part.mesh} vertex ${Math.floor(i / 3)}: ${gpu[i]} vs ${cpp[i]}`;
+        }
+      }
+      out.vertices += gpu.length / 3;
+    }
+    ++out.frames;
+  }
+  player.jigglesEnabled = true;
+  return out;
+}
+
+// A `both` bake: at the clips' own key times the file's sampled channels (sampled mode) must put the
+// skinned joints where the JavaScript runtime does (the bake sampled them through the C++ runtime).
+// Joints a jiggle moves are left out: their channels hold the baked jiggle on top.
+function sampledAgainstRuntime(player) {
+  const modes = player.availableMuscleModes();
+  if (!modes.includes('runtime') || !modes.includes('sampled')) return null;
+  const jiggling = new Set(player.jiggles.map((j) => j.node));
+  const out = { frames: 0, compared: 0, translation_m: 0, linear: 0 };
+  for (const clip of player.clips) {
+    const times = clip.clip.tracks.length ? clip.clip.tracks[0].times : [];
+    for (const q of [0.25, 0.5, 0.75]) {
+      if (!times.length) break;
+      const time = times[Math.min(times.length - 1, Math.floor(q * (times.length - 1)))];
+      player.setMuscleMode('runtime');
+      player.selectClip(clip.index);
+      player.seek(time);
+      const runtime = player.lastEvaluation.map((e) => e.skinned);
+      player.setMuscleMode('sampled');
+      player.seek(time);
+      player.muscles.forEach((entry, m) => {
+        if (jiggling.has(entry.node)) return;
+        const sampled = entry.node.matrixWorld.elements;
+        for (let k = 0; k < 16; ++k) {
+          const key = k >= 12 ? 'translation_m' : 'linear';
+          out[key] = Math.max(out[key], Math.abs(sampled[k] - runtime[m][k]));
+        }
+        ++out.compared;
+      });
+      ++out.frames;
+    }
+  }
+  player.setMuscleMode('runtime');
+  return out;
+}
+
+// What one frame of the JavaScript runtime costs: every muscle evaluated and its node set (the pose
+// stays), microseconds per frame over 200 frames.
+function runtimeCost(player) {
+  if (!player.availableMuscleModes().includes('runtime')) return null;
+  player.setMuscleMode('runtime');
+  const frames = 200;
+  const t0 = performance.now();
+  for (let f = 0; f < frames; ++f) player.applyMuscles();
+  return { muscles: player.muscles.length, us_per_frame: ((performance.now() - t0) * 1000) / frames };
+}
+
+export async function runSelfTest(player, reference, loadError = null) {
+  const started = performance.now();
+  const result = { done: false, loaded: !!player && !loadError, errors: captured.errors, warnings: captured.warnings, seconds: {} };
+  const stage = (name, run) => {
+    const t0 = performance.now();
+    try {
+      result[name] = run();
+    } catch (error) {
+      captured.errors.push(`${name}: ${error.name}: ${error.message}`);
+    }
+    result.seconds[name] = (performance.now() - t0) / 1000;
+  };
+  if (player && !loadError) {
+    player.stop();
+    player.playing = false;
+    // Two frames of the real render loop first: the page plays by itself.
+    await new Promise((resolve) => {
+      let frames = 0;
+      player.playing = true;
+      player.onFrame = () => {
+        if (++frames === 2) resolve();
+      };
+      player.start();
+    });
+    // The page's load time: from the navigation's start (performance's time origin) to the second frame
+    // on screen, i.e. the scripts parsed, the base64 GLB decoded and loaded, the shaders compiled.
+    result.seconds.load = performance.now() / 1000;
+    player.stop();
+    player.playing = false;
+    result.file = {
+      muscles: player.muscles.length,
+      jiggles: player.jiggles.length,
+      clips: player.clips.length,
+      vertices: player.vertexCount,
+      packed: player.hasPacked,
+      fileInfluences: player.fileInfluences,
+      muscleModes: player.availableMuscleModes(),
+      influences: player.availableInfluences(),
+    };
+    stage('clips', () => playEveryClip(player));
+    stage('modes', () => everyMode(player));
+    stage('hit', () => hitTest(player));
+    stage('runtime', () => runtimeCost(player));
+    stage('sampled', () => sampledAgainstRuntime(player));
+    if (reference) {
+      stage('matrices', () => compareMatrices(player, reference));
+      stage('skinning', () => compareSkinning(player, reference));
+    }
+  }
+  result.seconds.total = (performance.now() - started) / 1000;
+  result.done = true;
+  const pre = document.createElement('pre');
+  pre.id = 'rigbake-test-result';
+  pre.textContent = JSON.stringify(result);
+  document.body.appendChild(pre);
+  document.title = 'rigbake-test: done';
+}
