@@ -137,7 +137,7 @@ JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& c
 }
 
 JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
-                           bool force) {
+                           bool force, int bake_threads) {
   const CharacterOutputs out = characterOutputs(manifest, character);
   std::string hash;
   try {
@@ -178,6 +178,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     BakeOptions options;
     options.influences = character.influences;
     options.gltf_weights = character.gltf_weights;
+    options.threads = bake_threads;
     BakeResult bake = bakeCharacter(body, muscles, options);
     std::string model = serializeGltf(bakedModel(*loaded.character.document, body, bake), true);
     writeFileAtomically(out.muscles, muscleJson(muscles, body.skeleton, preset.name));
