@@ -237,7 +237,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       const auto& [clip, time] = samples[i * samples.size() / std::min(wanted, samples.size())];
       poses.push_back(sampleClip(skeleton, character.clips[clip], time));
     }
-    result.fit = fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, options.fit);
+    result.fit =
+        fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, options.fit, options.threads);
   }
   timing.fit = lap();
   const runtime::MuscleRig<double> rig = buildMuscleRig(rigged, skeleton);
