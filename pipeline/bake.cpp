@@ -370,7 +370,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       }
       clips.push_back(std::move(clip));
     }
-    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips);
+    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips, options.threads);
   }
   timing.quality = lap();
   return result;
