@@ -309,7 +309,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.mesh_part = weights.mesh_part;
     baked.full = weights.rig;
     const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
-    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames);
+    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames, options.threads);
     const QuantizedInfluences quantized_fine =
         unorm16 ? quantizeInfluences(pruned, kUnsignedShortScale) : QuantizedInfluences{};
     timing.weights += lap();
