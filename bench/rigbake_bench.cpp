@@ -59,8 +59,10 @@ int main(int argc, char** argv) {
                                 {"place", place},
                                 {"evaluate", timings.evaluate},
                                 {"weights", timings.weights},
+                                {"fit", timings.fit},
                                 {"pack", timings.pack},
                                 {"error", timings.error},
+                                {"quality", timings.quality},
                                 {"write", write},
                                 {"peak_mb", usage.ru_maxrss / 1024.0}}
                      .dump()
