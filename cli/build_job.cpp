@@ -3,7 +3,6 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <tiny_gltf.h>
 
 #include "anatomy/error.h"
 #include "anatomy/placement.h"
@@ -13,7 +12,6 @@
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
 #include "formats/gltf_bake.h"
-#include "formats/gltf_write.h"
 #include "formats/muscle_json.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
@@ -36,6 +34,7 @@ SharedPresets loadSharedPresets(const std::string& presets_dir) {
   shared.directory = presets_dir;
   shared.maps = readNamingMaps(presets_dir + "/skeletons");
   shared.rules = readLandmarkRules(presets_dir + "/landmarks.json");
+  shared.regions = presets_dir + "/regions/body.json";
   return shared;
 }
 
@@ -78,7 +77,9 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
   return contentHash(files, std::string("rigbake ") + RIGBAKE_VERSION + " influences " +
                                 std::to_string(character.influences) + " gltf_weights " +
                                 gltfWeightsName(character.gltf_weights) + " muscles_from " + character.muscles_from +
-                                (character.rom.empty() ? std::string() : " rom"));
+                                (character.rom.empty() ? std::string() : " rom") + " muscle_motion " +
+                                muscleMotionName(character.muscle_motion) + (character.helper_joints ? " helper_joints" : "") +
+                                " response " + responseModeName(character.response));
 }
 
 // Validates the written model against its muscle file and writes the three reports; returns how many
@@ -179,10 +180,15 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     options.influences = character.influences;
     options.gltf_weights = character.gltf_weights;
     options.threads = bake_threads;
+    options.motion = character.muscle_motion;
+    options.helper_joints = character.helper_joints;
+    options.response = character.response;
+    options.regions = resolveBodyRegions(body, loaded.landmarks, readRegionPreset(presets.regions));
     BakeResult bake = bakeCharacter(body, muscles, options);
-    std::string model = serializeGltf(bakedModel(*loaded.character.document, body, bake), true);
-    writeFileAtomically(out.muscles, muscleJson(muscles, body.skeleton, preset.name));
-    writeFileAtomically(out.model, model);
+    const BakedFile file = writeBakedFile(*loaded.character.document, body, bake, true, {});
+    // The muscles as baked (carriers chosen, response fitted): what a retarget of this cast carries on.
+    writeFileAtomically(out.muscles, muscleJson(bake.muscles, body.skeleton, preset.name));
+    writeFileAtomically(out.model, file.bytes);
     JobOutcome outcome;
     outcome.name = character.name;
     outcome.status = JobStatus::kBuilt;

@@ -24,6 +24,7 @@ struct SharedPresets {
   std::string directory;
   std::vector<NamingMap> maps;
   LandmarkRules rules;
+  std::string regions;  // the body-region preset file for the deformation-quality figures
 };
 SharedPresets loadSharedPresets(const std::string& presets_dir);
 

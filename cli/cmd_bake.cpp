@@ -3,7 +3,6 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <tiny_gltf.h>
 
 #include "anatomy/error.h"
 #include "anatomy/placement.h"
@@ -40,6 +39,8 @@ struct BakeCommandOptions {
   std::string gltf_weights = "milli";
   std::string regions = "body";
   std::string response = "auto";
+  std::string muscle_motion = "runtime";
+  bool helper_joints = false;
   std::string muscles_output;
   double fps = 0.0;
   int threads = 0;
@@ -111,22 +112,6 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
   return stats;
 }
 
-bool isVrm(const tinygltf::Model& model) {
-  return model.extensions.count("VRMC_vrm") > 0 || model.extensions.count("VRM") > 0;
-}
-
-// VRM runtimes simulate spring bones live; the baked channels stay for every other glTF player.
-void addSpringBones(tinygltf::Model* model, const Character& character, const BakeOptions& options,
-                    const BakeResult& bake, int first_muscle_node) {
-  std::vector<VrmSpring> springs = vrmSpringsForSkeleton(character.skeleton, options.jiggles);
-  for (const JiggleSetup& setup : options.jiggles) {
-    if (setup.host != JiggleHost::kMuscle) continue;
-    const int joint = bake.skinned_joint_of_muscle[setup.muscle];
-    springs.push_back(vrmSpringFor(setup, first_muscle_node + joint, bake.joints[joint].rest_local.scale));
-  }
-  addVrmSpringBones(model, springs);
-}
-
 int run(const BakeCommandOptions& options) {
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
@@ -149,6 +134,8 @@ int run(const BakeCommandOptions& options) {
   bake_options.fps = options.fps;
   bake_options.threads = options.threads;
   parseResponseMode(options.response, &bake_options.response);  // CLI11 has checked the name
+  parseMuscleMotion(options.muscle_motion, &bake_options.motion);
+  bake_options.helper_joints = options.helper_joints;
   bake_options.regions =
       resolveBodyRegions(character, resolved.landmarks, readRegionPreset(presetFile(options.presets, "regions", options.regions)));
   if (!options.jiggle.empty()) {
@@ -166,15 +153,16 @@ int run(const BakeCommandOptions& options) {
   if (!options.rom.empty()) stats["rom"] = romJson(rom, character.skeleton);
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
-  tinygltf::Model model = bakedModel(*resolved.loaded.document, character, bake);
-  const bool vrm_springs = !bake_options.jiggles.empty() && isVrm(model);
+  const bool vrm_springs = !bake_options.jiggles.empty() && isVrmDocument(*resolved.loaded.document);
   if (options.springs_only && !vrm_springs)
     fail("USAGE", "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
-  if (vrm_springs) addSpringBones(&model, character, bake_options, bake, static_cast<int>(model.nodes.size() - bake.joints.size()));
-  std::string model_bytes = serializeGltf(model, isBinaryGltfPath(options.output));
+  const BakedFile file = writeBakedFile(*resolved.loaded.document, character, bake, isBinaryGltfPath(options.output),
+                                        vrm_springs ? bake_options.jiggles : std::vector<JiggleSetup>{});
+  stats["animation_bytes"] = {{"input", file.input_animation_bytes}, {"output", file.animation_bytes},
+                              {"muscle_motion", muscleMotionName(bake.motion)}};
   std::vector<PackedInfluences> packed;
   for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
-  writeFileAtomically(options.output, model_bytes);
+  writeFileAtomically(options.output, file.bytes);
   if (!options.packed_output.empty()) writePackedFile(options.packed_output, packed);
   if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, stats.dump(2) + "\n");
   if (!options.muscles_output.empty())
@@ -260,6 +248,16 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "nothing (docs/muscle-model.md)")
       ->check(CLI::IsMember({"auto", "fit", "keep"}))
       ->capture_default_str();
+  command->add_option("--muscle-motion", options->muscle_motion,
+                      "How the muscle joints move in the file: runtime = the RIGBAKE_muscle_rig extension only, for "
+                      "engines that evaluate the rig (no sampled muscle channels; a plain viewer plays the input's own "
+                      "skinning); sampled = channels for the skinned joints, no extension; both = the extension and the "
+                      "channels (docs/runtime.md)")
+      ->check(CLI::IsMember({"runtime", "sampled", "both"}))
+      ->capture_default_str();
+  command->add_flag("--helper-joints", options->helper_joints,
+                    "Also write each muscle's base, tip and driver joints (the talk's aim and point constraints) as nodes, "
+                    "sampled when the motion is sampled");
   command->add_option("--muscles-out", options->muscles_output,
                       "Write the muscles as baked (fitted response curves included) as muscle JSON, to edit or retarget");
   command->add_option("--regions", options->regions,

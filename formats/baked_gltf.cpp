@@ -15,6 +15,7 @@
 #include "anatomy/error.h"
 #include "formats/gltf_accessor.h"
 #include "formats/gltf_json_value.h"
+#include "formats/muscle_rig_extension.h"
 
 namespace rigbake {
 namespace {
@@ -277,18 +278,22 @@ void readMuscleNodes(const tinygltf::Model& model, const Character& character, B
     data->muscle_nodes.push_back(node);
   }
 
-  // Each muscle is a complete joint group, its skinned joint deforms every skin, and every clip
-  // animates every joint of the group (the bake samples all of them).
+  // Each muscle has its skinned joint, in every skin, and either all three helpers (base, tip, driver)
+  // or none (bake --helper-joints). Without the RIGBAKE_muscle_rig extension nothing evaluates the
+  // muscles at run time, so every clip must animate every muscle joint; with it, a joint that has
+  // channels has all of them (muscle-motion "both").
   std::map<std::string, std::set<std::string>> roles;
   for (const FileMuscleNode& node : data->muscle_nodes) {
     if (!roles[node.muscle].insert(node.role).second)
       data->structure.push_back({"/nodes/" + std::to_string(node.node), node.muscle + " has two " + node.role + " joints"});
   }
   for (const auto& [muscle, present] : roles) {
-    for (const auto& [role, suffix] : kSuffix) {
-      if (!present.count(role)) data->structure.push_back({"/nodes", muscle + " has no " + role + " joint node"});
-    }
+    if (!present.count("skinned")) data->structure.push_back({"/nodes", muscle + " has no skinned joint node"});
+    const int helpers = static_cast<int>(present.count("base") + present.count("tip") + present.count("driver"));
+    if (helpers != 0 && helpers != 3)
+      data->structure.push_back({"/nodes", muscle + " has " + std::to_string(helpers) + " of its 3 helper joints (base, tip, driver)"});
   }
+  const bool runtime = model.extensions.count(kMuscleRigExtension) > 0;
   for (const FileMuscleNode& node : data->muscle_nodes) {
     if (node.role == "skinned") {
       for (size_t s = 0; s < model.skins.size(); ++s) {
@@ -304,6 +309,7 @@ void readMuscleNodes(const tinygltf::Model& model, const Character& character, B
       for (const tinygltf::AnimationChannel& channel : animation.channels) {
         if (channel.target_node == node.node) paths.insert(channel.target_path);
       }
+      if (runtime && paths.empty()) continue;
       std::vector<std::string> needed = {"translation", "rotation"};
       if (node.role == "skinned") needed.push_back("scale");
       for (const std::string& path : needed) {
@@ -350,6 +356,11 @@ BakedFileData readBakedFileData(const LoadedCharacter& loaded) {
   }
   readMuscleNodes(model, character, &data);
   readJiggles(model, &data);
+  data.rig = readMuscleRigExtension(model, character);
+  for (const std::string& problem : data.rig.problems) {
+    const size_t colon = problem.find(": ");
+    data.structure.push_back({problem.substr(0, colon), problem.substr(colon + 2)});
+  }
   const bool baked = !data.muscle_nodes.empty();
   for (size_t p = 0; p < character.meshes.size(); ++p) {
     const MeshPart& part = character.meshes[p];

@@ -48,7 +48,8 @@ std::vector<std::string> referencedFiles(const std::string& gltf_path) {
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", "MANIFEST_INVALID");
-  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "out", "characters"});
+  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "out",
+                "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -84,13 +85,27 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     value.fail("ROM preset '" + rom + "' is neither a file (relative to the manifest) nor a shipped ROM preset name");
   };
   if (in.has("rom")) manifest.rom = romOf(in.at("rom"));
+  auto motionOf = [](const JsonReader& value) {
+    MuscleMotion motion = MuscleMotion::kRuntime;
+    if (!parseMuscleMotion(value.asString(), &motion)) value.fail("must be \"runtime\", \"sampled\" or \"both\"");
+    return motion;
+  };
+  auto responseOf = [](const JsonReader& value) {
+    ResponseMode mode = ResponseMode::kAuto;
+    if (!parseResponseMode(value.asString(), &mode)) value.fail("must be \"auto\", \"fit\" or \"keep\"");
+    return mode;
+  };
+  if (in.has("muscle_motion")) manifest.muscle_motion = motionOf(in.at("muscle_motion"));
+  if (in.has("helper_joints")) manifest.helper_joints = in.at("helper_joints").asBool();
+  if (in.has("response")) manifest.response = responseOf(in.at("response"));
   manifest.out = resolve(manifest.directory, in.has("out") ? in.at("out").asString() : std::string("build"));
   JsonReader characters = in.at("characters");
   if (characters.arraySize() == 0) characters.fail("must list at least one character");
   std::set<std::string> names;
   for (size_t i = 0; i < characters.arraySize(); ++i) {
     JsonReader item = characters.at(i);
-    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom"});
+    item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom",
+                    "muscle_motion", "helper_joints", "response"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -107,6 +122,9 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.influences = item.has("influences") ? influencesOf(item.at("influences")) : manifest.influences;
     c.gltf_weights = item.has("gltf_weights") ? gltfWeightsOf(item.at("gltf_weights")) : manifest.gltf_weights;
     c.rom = item.has("rom") ? romOf(item.at("rom")) : manifest.rom;
+    c.muscle_motion = item.has("muscle_motion") ? motionOf(item.at("muscle_motion")) : manifest.muscle_motion;
+    c.helper_joints = item.has("helper_joints") ? item.at("helper_joints").asBool() : manifest.helper_joints;
+    c.response = item.has("response") ? responseOf(item.at("response")) : manifest.response;
     manifest.characters.push_back(std::move(c));
   }
   buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work

@@ -8,6 +8,9 @@
 
 #include "anatomy/error.h"
 #include "formats/gltf_buffer.h"
+#include "formats/gltf_write.h"
+#include "formats/muscle_rig_extension.h"
+#include "formats/vrm_spring.h"
 #include "pipeline/muscle_joint.h"
 
 namespace rigbake {
@@ -115,15 +118,17 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
   const Skeleton& skeleton = character.skeleton;
   GltfBufferAppender data(&model);
 
-  // Joint nodes, children of their attach joints.
-  const int first_node = static_cast<int>(model.nodes.size());
-  for (const BakedJoint& joint : bake.joints) {
+  // Joint nodes, children of their attach joints: the skinned joints always, the helpers (base, tip,
+  // driver) when asked for. node_of_joint[k] is -1 for a joint not written.
+  std::vector<int> node_of_joint(bake.joints.size(), -1);
+  for (size_t k = 0; k < bake.joints.size(); ++k) {
+    const BakedJoint& joint = bake.joints[k];
+    if (joint.role != MuscleJointRole::kSkinned && !bake.helper_joints) continue;
     tinygltf::Node node;
     node.name = joint.name;
     node.translation = vec(joint.rest_local.translation);
     node.rotation = quat(joint.rest_local.rotation.normalized());
     if (joint.role == MuscleJointRole::kSkinned) node.scale = vec(joint.rest_local.scale);
-    // What an engine needs to rebuild the constraints at run time instead of playing the samples.
     const MusclePart& part = bake.muscles.parts[joint.muscle];
     static const char* kRoleNames[] = {"base", "tip", "driver", "skinned"};
     tinygltf::Value::Object description;
@@ -137,8 +142,9 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     tinygltf::Value::Object extras;
     extras["rigbake"] = tinygltf::Value(description);
     node.extras = tinygltf::Value(extras);
+    node_of_joint[k] = static_cast<int>(model.nodes.size());
     model.nodes.push_back(node);
-    model.nodes[skeleton.nodes[joint.parent]].children.push_back(static_cast<int>(model.nodes.size()) - 1);
+    model.nodes[skeleton.nodes[joint.parent]].children.push_back(node_of_joint[k]);
   }
 
   // Skins: every skin gets every muscle's skinned joint, with its inverse bind matrix in the skin's
@@ -161,7 +167,7 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     }
     const Eigen::Affine3d placement = character.skin_placement[s];
     for (int k : bake.skinned_joint_of_muscle) {
-      skin.joints.push_back(first_node + k);
+      skin.joints.push_back(node_of_joint[k]);
       appendMatrix(&inverse_binds, (placement.inverse() * bake.joints[k].bind_world).inverse().matrix());
     }
     skin.inverseBindMatrices = data.addFloats(inverse_binds, TINYGLTF_TYPE_MAT4, 16);
@@ -187,14 +193,17 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     }
   }
 
-  // Animation: one LINEAR sampler per joint and path, on the clip's sample times.
+  // Animation: one LINEAR sampler per written joint and path, on the clip's sample times; none for the
+  // muscles when the runtime evaluates them.
+  const bool sampled = bake.motion != MuscleMotion::kRuntime;
   for (const BakedClip& clip : bake.clips) {
-    if (clip.times.empty() || clip.measure_only) continue;
+    if (!sampled || clip.times.empty() || clip.measure_only) continue;
     tinygltf::Animation& animation = model.animations[clip.gltf_animation];
     std::vector<float> times(clip.times.begin(), clip.times.end());
     const int input = data.addFloats(times, TINYGLTF_TYPE_SCALAR, 1, true);
     for (size_t k = 0; k < bake.joints.size(); ++k) {
       const BakedJoint& joint = bake.joints[k];
+      if (node_of_joint[k] < 0) continue;
       std::vector<Trs> keys;
       for (size_t t = 0; t < clip.times.size(); ++t) keys.push_back(clip.local[t][k]);
       const TrsKeys trs_keys = trsKeys(keys);
@@ -209,7 +218,7 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
         animation.samplers.push_back(sampler);
         tinygltf::AnimationChannel channel;
         channel.sampler = static_cast<int>(animation.samplers.size()) - 1;
-        channel.target_node = first_node + static_cast<int>(k);
+        channel.target_node = node_of_joint[k];
         channel.target_path = path;
         animation.channels.push_back(channel);
       };
@@ -219,7 +228,92 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     }
     writeJiggles(clip, skeleton, input, &data, &animation);
   }
+
+  if (bake.motion != MuscleMotion::kSampled) {
+    MuscleRigNodes nodes;
+    for (size_t m = 0; m < bake.muscles.parts.size(); ++m) {
+      nodes.skinned.push_back(node_of_joint[bake.skinned_joint_of_muscle[m]]);
+      std::vector<int> helpers;
+      if (bake.helper_joints) {
+        for (size_t k = 0; k < bake.joints.size(); ++k) {
+          if (bake.joints[k].muscle == static_cast<int>(m) && bake.joints[k].role != MuscleJointRole::kSkinned)
+            helpers.push_back(node_of_joint[k]);
+        }
+      }
+      nodes.helpers.push_back(helpers);
+    }
+    std::vector<RigJiggle> jiggles;
+    for (const JiggleSetup& setup : bake.jiggles) {
+      RigJiggle jiggle;
+      jiggle.name = setup.name;
+      jiggle.setup = setup;
+      if (setup.host == JiggleHost::kMuscle) {
+        jiggle.node = nodes.skinned[setup.muscle];
+        jiggle.parent_node = skeleton.nodes[muscleCarrierJoint(bake.muscles.parts[setup.muscle])];
+      } else {
+        jiggle.node = skeleton.nodes[setup.joint];
+        const int parent = skeleton.parents[setup.joint];
+        jiggle.parent_node = parent >= 0 ? skeleton.nodes[parent] : -1;
+      }
+      jiggle.root_node = skeleton.nodes[setup.root];
+      jiggles.push_back(jiggle);
+    }
+    addMuscleRigExtension(&model, skeleton, bake.muscles, buildMuscleRig(bake.muscles, skeleton), nodes, jiggles);
+  }
   return model;
+}
+
+namespace {
+
+long long animationBytes(const tinygltf::Model& model) {
+  std::set<int> views;
+  for (const tinygltf::Animation& animation : model.animations) {
+    for (const tinygltf::AnimationSampler& sampler : animation.samplers) {
+      for (int accessor : {sampler.input, sampler.output}) {
+        if (accessor >= 0 && accessor < static_cast<int>(model.accessors.size()) && model.accessors[accessor].bufferView >= 0)
+          views.insert(model.accessors[accessor].bufferView);
+      }
+    }
+  }
+  long long bytes = 0;
+  for (int view : views) {
+    if (view < static_cast<int>(model.bufferViews.size())) bytes += static_cast<long long>(model.bufferViews[view].byteLength);
+  }
+  return bytes;
+}
+
+int nodeNamed(const tinygltf::Model& model, const std::string& name) {
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    if (model.nodes[n].name == name) return static_cast<int>(n);
+  }
+  return -1;
+}
+
+}  // namespace
+
+bool isVrmDocument(const GltfDocument& document) {
+  const tinygltf::Model& model = modelOf(document);
+  return model.extensions.count("VRMC_vrm") > 0 || model.extensions.count("VRM") > 0;
+}
+
+BakedFile writeBakedFile(const GltfDocument& document, const Character& character, const BakeResult& bake,
+                         bool binary, const std::vector<JiggleSetup>& springs) {
+  tinygltf::Model model = bakedModel(document, character, bake);
+  BakedFile file;
+  file.vrm = isVrmDocument(document);
+  file.input_animation_bytes = animationBytes(modelOf(document));
+  if (file.vrm && !springs.empty()) {
+    std::vector<VrmSpring> vrm_springs = vrmSpringsForSkeleton(character.skeleton, springs);
+    for (const JiggleSetup& setup : springs) {
+      if (setup.host != JiggleHost::kMuscle) continue;
+      const int joint = bake.skinned_joint_of_muscle[setup.muscle];
+      vrm_springs.push_back(vrmSpringFor(setup, nodeNamed(model, bake.joints[joint].name), bake.joints[joint].rest_local.scale));
+    }
+    addVrmSpringBones(&model, vrm_springs);
+  }
+  file.animation_bytes = animationBytes(model);
+  file.bytes = serializeGltf(model, binary);
+  return file;
 }
 
 }  // namespace rigbake

@@ -31,6 +31,25 @@ bool parseResponseMode(const std::string& name, ResponseMode* mode) {
   return false;
 }
 
+const char* muscleMotionName(MuscleMotion motion) {
+  switch (motion) {
+    case MuscleMotion::kRuntime: return "runtime";
+    case MuscleMotion::kSampled: return "sampled";
+    case MuscleMotion::kBoth: return "both";
+  }
+  return "runtime";
+}
+
+bool parseMuscleMotion(const std::string& name, MuscleMotion* motion) {
+  for (MuscleMotion candidate : {MuscleMotion::kRuntime, MuscleMotion::kSampled, MuscleMotion::kBoth}) {
+    if (name == muscleMotionName(candidate)) {
+      *motion = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
 std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
   switch (role) {
     case MuscleJointRole::kBase: return part.fullName() + "_muscleBase";
@@ -187,6 +206,9 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   checkHits(options.hits, options.jiggles);
   BakeResult result;
   result.influences = options.influences;
+  result.motion = options.motion;
+  result.helper_joints = options.helper_joints;
+  result.jiggles = options.jiggles;
   const int muscle_count = static_cast<int>(muscles.parts.size());
   const double body_height = muscles.body_height;
 

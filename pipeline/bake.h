@@ -32,6 +32,15 @@ enum class ResponseMode {
 const char* responseModeName(ResponseMode mode);
 bool parseResponseMode(const std::string& name, ResponseMode* mode);
 
+// How the muscle joints move in the written file (docs/runtime.md, "Choosing a mode").
+enum class MuscleMotion {
+  kRuntime,  // the RIGBAKE_muscle_rig extension only: engines evaluate the rig; +0 sampled channels
+  kSampled,  // channels for the skinned joints (and the helpers with helper_joints), no extension
+  kBoth,     // the extension and the skinned joints' channels, for players that may not run the rig
+};
+const char* muscleMotionName(MuscleMotion motion);
+bool parseMuscleMotion(const std::string& name, MuscleMotion* motion);
+
 struct BakeOptions {
   int influences = 4;  // 4, 7 or 10
   GltfWeights gltf_weights = GltfWeights::kMilli;
@@ -49,6 +58,8 @@ struct BakeOptions {
   // Threads for the per-vertex, per-frame and per-pose loops; 0: one per core. Every output is the same
   // at any count (pipeline/parallel.h).
   int threads = 0;
+  MuscleMotion motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;  // also write base, tip and driver as nodes (and, when sampled, channels)
 };
 
 // The four joints of one muscle group. Each is a new node: the skinned joint is also added to every
@@ -123,6 +134,9 @@ struct BakeResult {
   // Volume against the input's own and dual-quaternion skinning, with the WEIGHTS_n written.
   DeformationQuality quality;
   ResponseFitReport fit;  // parameters == 0 when nothing was fitted
+  MuscleMotion motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;
+  std::vector<JiggleSetup> jiggles;  // as baked (for the extension)
 };
 
 // Wall-clock seconds of the bake's stages, for bench/ only (never written into outputs).

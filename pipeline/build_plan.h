@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "pipeline/bake.h"
 #include "pipeline/influences.h"
 
 namespace rigbake {
@@ -19,6 +20,9 @@ struct BuildCharacter {
   int influences = 10;
   GltfWeights gltf_weights = GltfWeights::kMilli;
   std::string rom;           // ROM preset path to measure the bake and validation on too, or empty
+  MuscleMotion muscle_motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;
+  ResponseMode response = ResponseMode::kAuto;
   std::string pointer;       // JSON pointer in the manifest, for messages
 };
 
@@ -29,6 +33,9 @@ struct BuildManifest {
   int influences = 10;
   GltfWeights gltf_weights = GltfWeights::kMilli;
   std::string rom;        // default ROM preset path, or empty
+  MuscleMotion muscle_motion = MuscleMotion::kRuntime;
+  bool helper_joints = false;
+  ResponseMode response = ResponseMode::kAuto;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;
 };

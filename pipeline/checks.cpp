@@ -583,9 +583,10 @@ CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const st
 CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("GLTF_STRUCTURE", config);
   std::vector<FileIssue> issues = inputs.file->structure;
-  // Muscles the --muscles file names must all have been baked into this file.
+  // Muscles the --muscles file names must all have been baked into this file (their skinned joints;
+  // the helpers are optional, bake --helper-joints).
   if (inputs.muscles) {
-    static const char* kRoles[] = {"base", "tip", "driver", "skinned"};
+    static const char* kRoles[] = {"skinned"};
     for (const MusclePart& part : inputs.muscles->parts) {
       for (const char* role : kRoles) {
         bool found = false;
@@ -667,6 +668,20 @@ std::vector<std::int64_t> influenceHistogram(const BakedFileData& file) {
   return histogram;
 }
 
+std::vector<Eigen::Affine3d> bakedSkinMatrices(const Character& character, const BakedFileData& file, const Pose& pose) {
+  const Skeleton& skeleton = character.skeleton;
+  std::vector<Eigen::Affine3d> matrices(skeleton.size());
+  for (int j = 0; j < skeleton.size(); ++j) matrices[j] = pose.world[j] * skeleton.bind_world[j].inverse();
+  if (file.rig.present && file.rig.problems.empty() && !file.rig.rig.muscles.empty()) {
+    const RigEvaluation evaluation = evaluateRig(file.rig.rig, pose, false);
+    for (size_t m = 0; m < file.rig.skinned_joint.size(); ++m) {
+      const int joint = file.rig.skinned_joint[m];
+      matrices[joint] = matrixAt(evaluation.skinned, m) * skeleton.bind_world[joint].inverse();
+    }
+  }
+  return matrices;
+}
+
 std::vector<ClipDeformation> packedDeformationPerClip(const Character& character, const BakedFileData& file) {
   struct PartSets {
     const MeshPart* mesh;
@@ -691,8 +706,7 @@ std::vector<ClipDeformation> packedDeformationPerClip(const Character& character
     DeformationError total;
     for (double t : clip.times) {
       const Pose pose = poseAt(skeleton, clip, t);
-      std::vector<Eigen::Affine3d> matrices(skeleton.size());
-      for (int j = 0; j < skeleton.size(); ++j) matrices[j] = pose.world[j] * inverse_bind[j];
+      const std::vector<Eigen::Affine3d> matrices = bakedSkinMatrices(character, file, pose);
       for (const PartSets& part : parts) {
         total = combineDeformationErrors(
             total, skinningDeformationError(part.mesh->positions, part.standard, part.packed, matrices));

@@ -17,6 +17,8 @@
 #include "anatomy/muscle_set.h"
 #include "pipeline/memory_table.h"
 #include "pipeline/pack_influences.h"
+#include "pipeline/pose.h"
+#include "runtime/muscle_rig.h"
 
 namespace rigbake {
 
@@ -122,8 +124,19 @@ struct ClipJiggles {
   std::vector<JiggleSeries> jiggles;
 };
 
+// The RIGBAKE_muscle_rig extension as read (formats/muscle_rig_extension.h): the rig in terms of the
+// loaded skeleton's joints, and which joint each muscle's skinned node is.
+struct FileMuscleRig {
+  bool present = false;
+  runtime::MuscleRig<double> rig;
+  std::vector<std::string> names;
+  std::vector<int> skinned_joint;
+  std::vector<std::string> problems;
+};
+
 struct BakedFileData {
   std::vector<FileSkinAttributes> skins;
+  FileMuscleRig rig;
   std::vector<ClipJiggles> jiggles;
   std::vector<FileMuscleNode> muscle_nodes;
   std::vector<FileIssue> structure;  // structural problems found while reading
@@ -254,5 +267,10 @@ std::vector<std::int64_t> influenceHistogram(const BakedFileData& file);
 // of every clip (the clip's key times) and measures the displacement between them.
 std::vector<ClipDeformation> packedDeformationPerClip(const Character& character, const BakedFileData& file);
 Figure bodyFigure(const Character& character, const LandmarkSet& landmarks, const MuscleSet* muscles);
+
+// The skin matrices of a baked file's skeleton for a pose (joint world * inverse bind), with each
+// muscle's skinned joint evaluated by the runtime rig when the file carries the extension: what an
+// engine running the rig skins with.
+std::vector<Eigen::Affine3d> bakedSkinMatrices(const Character& character, const BakedFileData& file, const Pose& pose);
 
 }  // namespace rigbake

@@ -27,7 +27,8 @@ struct BakedCharacter {
   std::string bytes;  // the baked GLB
 };
 
-BakedCharacter bakeFile(const std::string& path, int influences, GltfWeights gltf_weights = GltfWeights::kMilli) {
+BakedCharacter bakeFile(const std::string& path, int influences, GltfWeights gltf_weights = GltfWeights::kMilli,
+                        MuscleMotion motion = MuscleMotion::kRuntime) {
   BakedCharacter baked;
   baked.path = path;
   test::Resolved r = test::resolveShipped(path);
@@ -37,6 +38,7 @@ BakedCharacter bakeFile(const std::string& path, int influences, GltfWeights glt
   BakeOptions options;
   options.influences = influences;
   options.gltf_weights = gltf_weights;
+  options.motion = motion;
   baked.bake = bakeCharacter(baked.loaded.character, baked.muscles, options);
   baked.bytes = serializeGltf(bakedModel(*baked.loaded.document, baked.loaded.character, baked.bake), true);
   return baked;
@@ -115,16 +117,32 @@ TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy,
         REQUIRE(sum == Approx(1.0).margin(1e-12));
       }
     }
-    // Every clip animates every muscle joint: T and R for base, tip and driver, T, R and S for the skinned one.
-    for (const Clip& clip : c.clips) {
-      int muscle_tracks = 0;
+    // The default, runtime motion: no muscle channels (the talk's "+0 animation sampled joints"), the
+    // rig in the RIGBAKE_muscle_rig extension instead.
+    auto muscleTracks = [](const Character& character, const Clip& clip) {
+      int tracks = 0;
       for (const Track& track : clip.tracks) {
-        const std::string& name = c.skeleton.names[track.joint];
-        muscle_tracks += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
+        const std::string& name = character.skeleton.names[track.joint];
+        tracks += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
       }
-      CHECK(muscle_tracks == 28 * 3);  // skin joints only: the skinned joints' T, R, S
-    }
+      return tracks;
+    };
+    for (const Clip& clip : c.clips) CHECK(muscleTracks(c, clip) == 0);
     CHECK(c.clips.size() == baked.loaded.character.clips.size());
+  }
+  // Sampled motion: every clip animates every skinned joint's T, R and S.
+  const BakedCharacter sampled = bakeFile(test::sampleGlbPath(), 10, GltfWeights::kMilli, MuscleMotion::kSampled);
+  test::TempDir dir;
+  std::ofstream(dir / "s.glb", std::ios::binary) << sampled.bytes;
+  const Character reloaded = loadCharacter(dir / "s.glb").character;
+  REQUIRE(reloaded.clips.size() == 3);
+  for (const Clip& clip : reloaded.clips) {
+    int tracks = 0;
+    for (const Track& track : clip.tracks) {
+      const std::string& name = reloaded.skeleton.names[track.joint];
+      tracks += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
+    }
+    CHECK(tracks == 28 * 3);
   }
 }
 

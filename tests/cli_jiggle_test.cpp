@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 nlohmann::json glbFileJson(const std::string& path) { return test::glbJson(slurp(path)); }
 
 std::string bakeArgs(const std::string& input, const std::string& output, const std::string& extra) {
-  return "bake " + ext::shellQuote(input) + " --influences 4 " + extra + " -o " + ext::shellQuote(output);
+  // Sampled motion: these tests read the baked jiggle channels back.
+  return "bake " + ext::shellQuote(input) + " --influences 4 --muscle-motion both " + extra + " -o " + ext::shellQuote(output);
 }
 
 const nlohmann::json* jiggleOf(const nlohmann::json& animation, const std::string& joint) {

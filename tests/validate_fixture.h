@@ -63,6 +63,8 @@ inline std::string bakeToFiles(const std::string& path, int influences, const st
   MuscleSet muscles = placeMuscles(loaded.character, resolved.landmarks, gowPreset(), Sides::kBoth);
   BakeOptions options;
   options.influences = influences;
+  // Both the rig extension and the skinned joints' channels: the checks read either.
+  options.motion = MuscleMotion::kBoth;
   BakeResult bake = bakeCharacter(loaded.character, muscles, options);
   const std::string stem = std::filesystem::path(path).stem().string() + "-" + std::to_string(influences);
   const std::string glb = dir + "/" + stem + ".glb";
