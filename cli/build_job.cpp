@@ -138,7 +138,7 @@ JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& c
 }
 
 JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
-                           bool force) {
+                           bool force, int bake_threads) {
   const CharacterOutputs out = characterOutputs(manifest, character);
   std::string hash;
   try {
@@ -179,6 +179,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     BakeOptions options;
     options.influences = character.influences;
     options.gltf_weights = character.gltf_weights;
+    options.threads = bake_threads;
     options.motion = character.muscle_motion;
     options.helper_joints = character.helper_joints;
     options.response = character.response;

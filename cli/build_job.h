@@ -29,8 +29,9 @@ struct SharedPresets {
 SharedPresets loadSharedPresets(const std::string& presets_dir);
 
 // Never throws for a character's own problems: they become a failed outcome, so the build goes on.
+// `bake_threads`: BakeOptions::threads of the character's bake (the outputs do not depend on it).
 JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
-                           bool force);
+                           bool force, int bake_threads = 1);
 JobOutcome failedJob(const BuildCharacter& character, const std::string& error);
 // The outcome a previous run stored beside the character's outputs (for --summary-only).
 JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& character);

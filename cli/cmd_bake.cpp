@@ -43,6 +43,7 @@ struct BakeCommandOptions {
   bool helper_joints = false;
   std::string muscles_output;
   double fps = 0.0;
+  int threads = 0;
   bool json = false;
   PresetOptions presets;
 };
@@ -131,6 +132,7 @@ int run(const BakeCommandOptions& options) {
   bake_options.influences = options.influences;
   parseGltfWeights(options.gltf_weights, &bake_options.gltf_weights);  // CLI11 has checked the name
   bake_options.fps = options.fps;
+  bake_options.threads = options.threads;
   parseResponseMode(options.response, &bake_options.response);  // CLI11 has checked the name
   parseMuscleMotion(options.muscle_motion, &bake_options.motion);
   bake_options.helper_joints = options.helper_joints;
@@ -230,6 +232,10 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->check(CLI::IsMember({"milli", "unorm16"}))
       ->capture_default_str();
   command->add_option("--fps", options->fps, "Sample clips at this rate (frames per second); 0 = at their own keys")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--threads", options->threads,
+                      "Threads to bake with (0 = one per core); the outputs are byte-identical at any count")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");

@@ -103,6 +103,9 @@ int run(const BuildCommandOptions& options) {
   SharedPresets shared = loadSharedPresets(presets_dir);
   std::filesystem::create_directories(manifest.out);
   const int jobs = options.jobs > 0 ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
+  // The cores the characters running at once leave each bake (its outputs are the same at any count).
+  const int workers = std::max(1, std::min<int>(jobs, static_cast<int>(selected.size())));
+  const int bake_threads = std::max(1, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())) / workers);
   // A character waits for its muscles_from source; a failed source fails its dependents.
   std::vector<JobOutcome> outcomes(manifest.characters.size());
   std::vector<int> state(manifest.characters.size(), 0);  // 0 waiting, 1 running, 2 finished
@@ -141,7 +144,7 @@ int run(const BuildCommandOptions& options) {
       lock.unlock();
       auto start = std::chrono::steady_clock::now();
       JobOutcome outcome = source_failed ? failedJob(character, "muscles_from character '" + character.muscles_from + "' failed")
-                                         : runCharacterJob(manifest, character, shared, options.force);
+                                         : runCharacterJob(manifest, character, shared, options.force, bake_threads);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
       outcomes[index] = outcome;

@@ -137,16 +137,21 @@ using Approximations = std::vector<std::pair<int, InfluenceSet>>;
 // of every clip, and where each clip's largest move is.
 DeformationFigures measureDeformation(const Character& character, const BakeResult& result,
                                       const Approximations& approximations,
-                                      const std::vector<std::vector<SkinFrame>>& clip_frames) {
+                                      const std::vector<std::vector<SkinFrame>>& clip_frames, int threads) {
   DeformationFigures errors;
   for (size_t c = 0; c < result.clips.size(); ++c) {
     DeformationError clip_error;
     ErrorPeak peak;
+    // Every frame of the clip at once, per part; combined below in frame order, as before.
+    std::vector<std::vector<DeformationError>> part_frames;
+    for (size_t a = 0; a < approximations.size(); ++a) {
+      const MeshPart& mesh = character.meshes[approximations[a].first];
+      part_frames.push_back(
+          skinningDeformationErrors(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c], threads));
+    }
     for (size_t t = 0; t < clip_frames[c].size(); ++t) {
       for (size_t a = 0; a < approximations.size(); ++a) {
-        const MeshPart& mesh = character.meshes[approximations[a].first];
-        const DeformationError frame =
-            skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c][t]);
+        const DeformationError& frame = part_frames[a][t];
         if (frame.max_vertex >= 0 && frame.max_displacement > clip_error.max_displacement)
           peak = ErrorPeak{approximations[a].first, frame.max_vertex, result.clips[c].times[t]};
         clip_error = combineDeformationErrors(clip_error, frame);
@@ -249,7 +254,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       const auto& [clip, time] = samples[i * samples.size() / std::min(wanted, samples.size())];
       poses.push_back(sampleClip(skeleton, character.clips[clip], time));
     }
-    result.fit = fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, options.fit);
+    result.fit =
+        fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, options.fit, options.threads);
   }
   timing.fit = lap();
   const runtime::MuscleRig<double> rig = buildMuscleRig(rigged, skeleton);
@@ -320,7 +326,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.mesh_part = weights.mesh_part;
     baked.full = weights.rig;
     const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
-    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames);
+    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames, options.threads);
     const QuantizedInfluences quantized_fine =
         unorm16 ? quantizeInfluences(pruned, kUnsignedShortScale) : QuantizedInfluences{};
     timing.weights += lap();
@@ -360,8 +366,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   timing.weights += lap();
   // Deformation error of the pruned, quantized weights against the full-precision ones.
-  result.error = measureDeformation(character, result, milli, clip_frames);
-  if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames);
+  result.error = measureDeformation(character, result, milli, clip_frames, options.threads);
+  if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames, options.threads);
   timing.error = lap();
 
   if (options.measure_quality) {
@@ -381,7 +387,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       }
       clips.push_back(std::move(clip));
     }
-    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips);
+    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips, options.threads);
   }
   timing.quality = lap();
   return result;

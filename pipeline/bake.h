@@ -55,6 +55,9 @@ struct BakeOptions {
   bool measure_quality = true;  // volumes against plain and dual-quaternion skinning, per clip and region
   ResponseMode response = ResponseMode::kAuto;
   ResponseFitOptions fit;
+  // Threads for the per-vertex, per-frame and per-pose loops; 0: one per core. Every output is the same
+  // at any count (pipeline/parallel.h).
+  int threads = 0;
   MuscleMotion motion = MuscleMotion::kRuntime;
   bool helper_joints = false;  // also write base, tip and driver as nodes (and, when sampled, channels)
 };

@@ -26,6 +26,13 @@ DeformationError skinningDeformationError(const std::vector<Eigen::Vector3d>& bi
                                           const InfluenceSet& reference, const InfluenceSet& approximation,
                                           const std::vector<Eigen::Affine3d>& skin_matrices);
 
+// skinningDeformationError() at every frame of `frames` (each one skin matrix per joint), frames on
+// `threads` threads (pipeline/parallel.h): the same figures to the bit, whatever the count.
+std::vector<DeformationError> skinningDeformationErrors(const std::vector<Eigen::Vector3d>& bind_positions,
+                                                        const InfluenceSet& reference, const InfluenceSet& approximation,
+                                                        const std::vector<std::vector<Eigen::Affine3d>>& frames,
+                                                        int threads);
+
 // |p_reference - p_approximation| for each vertex, skinned as above (what skinningDeformationError
 // summarizes; a report can map it onto the mesh).
 std::vector<double> skinningDisplacements(const std::vector<Eigen::Vector3d>& bind_positions,

@@ -9,6 +9,7 @@
 #include <limits>
 #include <map>
 
+#include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
 
 namespace rigbake {
@@ -34,7 +35,7 @@ struct FrameVolumes {
 
 DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
                                              const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
-                                             const std::vector<MeasuredClip>& clips) {
+                                             const std::vector<MeasuredClip>& clips, int threads) {
   const Skeleton& skeleton = character.skeleton;
   const int joint_count = skeleton.size();
   DeformationQuality quality;
@@ -70,16 +71,20 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
   auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame) {
     FrameVolumes out;
     out.regions.assign(region_count, {0, 0, 0});
+    DualQuaternionFrame dual_quaternions;  // of the skeleton's joints, split once per frame
     for (const PreparedPart& part : prepared) {
       std::vector<Eigen::Vector3d> posed[3];
       if (frame == nullptr) {
         posed[0] = posed[1] = posed[2] = weldedPositions(part.surface, part.mesh->positions);
       } else {
-        const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
-        posed[0] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, *frame));
-        posed[1] = weldedPositions(part.surface, skinDualQuaternion(part.mesh->positions, part.weights->input,
-                                                                    dualQuaternionFrame(skeleton_frame)));
-        posed[2] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, *frame));
+        if (dual_quaternions.real.empty()) {
+          const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
+          dual_quaternions = dualQuaternionFrame(skeleton_frame);
+        }
+        const std::vector<int>& welded = part.surface.vertex_of_weld;
+        skinLinearBlend(part.mesh->positions, part.weights->input, *frame, welded, &posed[0]);
+        skinDualQuaternion(part.mesh->positions, part.weights->input, dual_quaternions, welded, &posed[1]);
+        skinLinearBlend(part.mesh->positions, part.weights->rig, *frame, welded, &posed[2]);
       }
       for (int k = 0; k < 3; ++k) {
         out.body[k] += enclosedVolume(part.surface.whole, posed[k]);
@@ -108,8 +113,11 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
     figures.clip = clip.name;
     figures.regions.resize(region_count);
     double worst = -1.0;
+    // Every frame's volumes at once, then the extremes in frame order, as one thread would find them.
+    std::vector<FrameVolumes> clip_volumes(clip.times.size());
+    parallelForEach(threads, clip.times.size(), [&](size_t t) { clip_volumes[t] = volumesOf(&(*clip.frames)[t]); });
     for (size_t t = 0; t < clip.times.size(); ++t) {
-      const FrameVolumes volumes = volumesOf(&(*clip.frames)[t]);
+      const FrameVolumes& volumes = clip_volumes[t];
       const double time = clip.times[t];
       keepExtreme(change(volumes.body[0], bind.body[0]), time, &figures.body.input);
       keepExtreme(change(volumes.body[1], bind.body[1]), time, &figures.body.dual_quaternion);
@@ -145,8 +153,10 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
     const std::vector<Eigen::Affine3d>& frame = (*clips[sample.clip].frames)[sample.frame];
     PosedSample posed;
     for (const PreparedPart& part : prepared) {
-      posed.input.push_back(weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame)));
-      posed.rig.push_back(weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame)));
+      posed.input.emplace_back();
+      posed.rig.emplace_back();
+      skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.surface.vertex_of_weld, &posed.input.back());
+      skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.surface.vertex_of_weld, &posed.rig.back());
       posed.normals.push_back(vertexNormals(part.surface.whole, posed.input.back()));
     }
     return cache.emplace(std::make_pair(sample.clip, sample.frame), std::move(posed)).first->second;

@@ -82,8 +82,9 @@ struct DeformationQuality {
   std::vector<MuscleQuality> muscles;
 };
 
+// Frames are measured on `threads` threads (pipeline/parallel.h); the figures are the same at any count.
 DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
                                              const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
-                                             const std::vector<MeasuredClip>& clips);
+                                             const std::vector<MeasuredClip>& clips, int threads = 1);
 
 }  // namespace rigbake

@@ -15,14 +15,30 @@
 // Pass 2 makes the part's worst error the least any down-or-up rounding can give, whenever the refined
 // vertices' best stays above kRefineShare of pass 1's worst (so the vertices left alone cannot
 // decide it); the tests check that it does on every shared asset.
+//
+// Speed. Built frame by frame, G costs O(frames n^2) per vertex, the whole bake's largest term. But
+// d_i(t) = D_i(t) x with x = (v, 1) and D_i = M_i - M_0 (3x4), so G_ij = x^T C_ij x with the 4x4 moment
+// C_ij = sum_t D_i(t)^T D_j(t), which depends only on the joints (M_0, M_i, M_j): it is summed over the
+// frames once per joint triple that some vertex uses, and each vertex's G then costs O(n^2), whatever
+// the frame count (the moment form of the skinning-decomposition literature, e.g. Le and Deng, "Smooth
+// Skinning Decomposition with Rigid Bones", 2012, section 4). The moments round differently from the
+// frame-by-frame sums, so a vertex where two candidates come within that difference (a near tie the
+// tie tolerance decides) is costed again frame by frame, exactly as before: the roundings are the
+// reference ones (quantizeForMotionReference(), which the tests compare against on every shared asset).
+// Pass 1's worst frame is only needed where it could reach kRefineShare of the part's worst; the error
+// summed in squares bounds it (max_t |r(t)| <= sqrt(sum_t |r(t)|^2)), so the frames are only skinned
+// for vertices whose bound gets there.
 #include "pipeline/quantize_for_motion.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 
+#include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 
 namespace rigbake {
@@ -174,10 +190,313 @@ void writeUnits(const VertexMotion& motion, const std::vector<int>& units, int s
   writeCanonical(chosen, slots, v, out);
 }
 
+// Pass 2 for one vertex: the candidate with the smallest worst frame, if strictly better than pass 1's
+// `pass1_worst` (whose rounding is already in `out`).
+void refineVertex(const InfluenceSet& set, int v, const Eigen::Vector3d& position, const std::vector<SkinFrame>& frames,
+                  double pass1_worst, QuantizedInfluences* out) {
+  const VertexMotion motion = vertexMotion(set, v, position, frames);
+  std::vector<int> best;
+  double best_worst = pass1_worst;
+  for (unsigned mask : candidateMasks(motion)) {
+    std::vector<int> units = unitsOf(motion, mask);
+    const double w = worstFrameError(motion, units, best_worst);
+    if (w < best_worst) {
+      best_worst = w;
+      best = std::move(units);
+    }
+  }
+  if (!best.empty()) writeUnits(motion, best, set.slots_per_vertex, v, out);
+}
+
+// ---- The fast pass 1 ------------------------------------------------------------------------------
+
+constexpr int kMomentJoints = 16;  // vertices with more distinct joints take the reference path
+
+// A vertex's shares as vertexMotion() computes them (the same arithmetic, so the same bits), without
+// the per-frame positions.
+struct MotionShares {
+  int n = 0;
+  int missing = 0;
+  std::array<int, kMomentJoints> joints{};
+  std::array<double, kMomentJoints> exact{};
+  std::array<int, kMomentJoints> floor_units{};
+  bool tooMany = false;  // more than kMomentJoints distinct joints
+  bool choice() const { return n > 1 && missing > 0 && missing < n; }
+};
+
+MotionShares motionShares(const InfluenceSet& set, int v) {
+  MotionShares shares;
+  const int slots = set.slots_per_vertex;
+  double sum = 0.0;
+  for (int k = 0; k < slots; ++k) {
+    const double w = set.weights[static_cast<size_t>(v) * slots + k];
+    if (w <= 0.0) continue;
+    const int joint = set.joints[static_cast<size_t>(v) * slots + k];
+    int at = 0;
+    while (at < shares.n && shares.joints[at] != joint) ++at;
+    if (at == shares.n) {
+      if (shares.n == kMomentJoints) {
+        shares.tooMany = true;
+        return shares;
+      }
+      shares.joints[shares.n] = joint;
+      shares.exact[shares.n] = w;
+      ++shares.n;
+    } else {
+      shares.exact[at] += w;
+    }
+    sum += w;
+  }
+  int handed = 0;
+  for (int i = 0; i < shares.n; ++i) {
+    shares.exact[i] = shares.exact[i] / sum * kMilliScale;
+    shares.floor_units[i] = static_cast<int>(std::floor(shares.exact[i]));
+    handed += shares.floor_units[i];
+  }
+  shares.missing = kMilliScale - handed;
+  return shares;
+}
+
+// candidateMasks() for MotionShares, in the same order, into `masks`.
+void motionCandidates(const MotionShares& shares, std::vector<unsigned>* masks) {
+  const int n = shares.n;
+  std::array<int, kMomentJoints> order{};
+  std::iota(order.begin(), order.begin() + n, 0);
+  std::stable_sort(order.begin(), order.begin() + n, [&](int a, int b) {
+    return shares.exact[a] - shares.floor_units[a] > shares.exact[b] - shares.floor_units[b];
+  });
+  unsigned largest_remainder = 0;
+  for (int i = 0; i < shares.missing; ++i) largest_remainder |= 1u << order[i];
+  unsigned integral = 0;  // shares already on an integer cannot round up
+  for (int i = 0; i < n; ++i)
+    if (!(shares.exact[i] > shares.floor_units[i])) integral |= 1u << i;
+  masks->clear();
+  masks->push_back(largest_remainder);
+  // Every n-bit mask with `missing` bits, ascending (Gosper's hack).
+  const unsigned limit = 1u << n;
+  for (unsigned mask = (1u << shares.missing) - 1; mask < limit;) {
+    if (mask != largest_remainder && (mask & integral) == 0) masks->push_back(mask);
+    const unsigned low = mask & (~mask + 1u);
+    const unsigned ripple = mask + low;
+    mask = (((ripple ^ mask) >> 2) / low) | ripple;
+  }
+}
+
+// The moment of a joint triple (first joint, i, j), i <= j: the symmetric part of sum_t D_i^T D_j as
+// its 10 upper entries, off-diagonal ones doubled, so that x^T C x = sum_{p <= q} c_pq x_p x_q.
+struct TripleMoment {
+  std::array<double, 10> c{};
+  double scale = 0.0;  // i == j: sum_t |D_i(t)|_F^2, the size of the terms the form cancels
+  bool zero = true;    // i == j: D_i(t) == 0 at every frame (joint i moves exactly as the first)
+};
+
+std::uint64_t tripleKey(int first, int i, int j) {
+  if (i > j) std::swap(i, j);
+  return (static_cast<std::uint64_t>(first) << 42) | (static_cast<std::uint64_t>(i) << 21) | static_cast<std::uint64_t>(j);
+}
+
+TripleMoment tripleMoment(std::uint64_t key, const std::vector<SkinFrame>& frames) {
+  const int first = static_cast<int>(key >> 42), i = static_cast<int>((key >> 21) & 0x1fffff),
+            j = static_cast<int>(key & 0x1fffff);
+  TripleMoment moment;
+  for (const SkinFrame& frame : frames) {
+    const double* m0 = frame[first].data();
+    const double* mi = frame[i].data();
+    const double* mj = frame[j].data();
+    double di[3][4], dj[3][4];  // rows of the 3x4 differences (column-major 4x4 sources)
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 4; ++c) {
+        di[r][c] = mi[4 * c + r] - m0[4 * c + r];
+        dj[r][c] = mj[4 * c + r] - m0[4 * c + r];
+      }
+    }
+    int at = 0;
+    for (int p = 0; p < 4; ++p) {
+      for (int q = p; q < 4; ++q) {
+        double sum = 0.0;
+        for (int r = 0; r < 3; ++r) sum += di[r][p] * dj[r][q] + (p == q ? 0.0 : di[r][q] * dj[r][p]);
+        moment.c[at++] += sum;
+      }
+    }
+    if (i == j) {
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 4; ++c) {
+          moment.scale += di[r][c] * di[r][c];
+          if (di[r][c] != 0.0) moment.zero = false;
+        }
+      }
+    }
+  }
+  return moment;
+}
+
+double momentForm(const TripleMoment& moment, const Eigen::Vector3d& v) {
+  const double x[4] = {v.x(), v.y(), v.z(), 1.0};
+  double sum = 0.0;
+  int at = 0;
+  for (int p = 0; p < 4; ++p)
+    for (int q = p; q < 4; ++q) sum += moment.c[at++] * x[p] * x[q];
+  return sum;
+}
+
+// The moments of every triple the vertices with a choice use, sorted by key.
+struct MomentTable {
+  std::vector<std::uint64_t> keys;
+  std::vector<TripleMoment> moments;
+  const TripleMoment& at(int first, int i, int j) const {
+    const std::uint64_t key = tripleKey(first, i, j);
+    const size_t index = static_cast<size_t>(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin());
+    assert(index < keys.size() && keys[index] == key);
+    return moments[index];
+  }
+};
+
+constexpr size_t kVertexGrain = 2048;
+
+MomentTable momentTable(const InfluenceSet& set, const std::vector<SkinFrame>& frames, int threads) {
+  const size_t vertices = static_cast<size_t>(set.vertexCount());
+  std::vector<std::vector<std::uint64_t>> chunk_keys(parallelChunkCount(vertices, kVertexGrain));
+  parallelFor(threads, vertices, kVertexGrain, [&](size_t chunk, size_t begin, size_t end) {
+    std::vector<std::uint64_t>& keys = chunk_keys[chunk];
+    for (size_t v = begin; v < end; ++v) {
+      const MotionShares shares = motionShares(set, static_cast<int>(v));
+      if (shares.tooMany || !shares.choice()) continue;
+      for (int i = 1; i < shares.n; ++i)
+        for (int j = i; j < shares.n; ++j) keys.push_back(tripleKey(shares.joints[0], shares.joints[i], shares.joints[j]));
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  });
+  MomentTable table;
+  for (std::vector<std::uint64_t>& keys : chunk_keys) {
+    std::vector<std::uint64_t> merged;
+    merged.reserve(table.keys.size() + keys.size());
+    std::set_union(table.keys.begin(), table.keys.end(), keys.begin(), keys.end(), std::back_inserter(merged));
+    table.keys.swap(merged);
+    std::vector<std::uint64_t>().swap(keys);
+  }
+  table.moments.resize(table.keys.size());
+  parallelFor(threads, table.keys.size(), 64, [&](size_t, size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) table.moments[k] = tripleMoment(table.keys[k], frames);
+  });
+  return table;
+}
+
+// Pass 1 from the moments: the mask leastSquaresMask() would choose, or false when a comparison it
+// makes comes too close to call with the moments' roundings (then the caller costs the vertex frame by
+// frame). *cost gets the chosen candidate's error summed in squares (in thousandths squared) and
+// *cost_error how far that figure may be off.
+bool momentMask(const MotionShares& shares, const Eigen::Vector3d& position, const MomentTable& table,
+                std::vector<unsigned>* masks, unsigned* chosen, double* cost, double* cost_error) {
+  const int n = shares.n;
+  double gram[kMomentJoints][kMomentJoints];
+  double magnitude[kMomentJoints];  // sqrt of G_ii plus what the form may have cancelled
+  bool zero[kMomentJoints];         // d_i(t) == 0 at every frame: row and column i of G vanish
+  const double x2 = position.squaredNorm() + 1.0;
+  magnitude[0] = 0.0;
+  zero[0] = true;  // d_0 = 0
+  for (int i = 1; i < n; ++i) {
+    for (int j = i; j < n; ++j) {
+      const TripleMoment& moment = table.at(shares.joints[0], shares.joints[i], shares.joints[j]);
+      gram[i][j] = gram[j][i] = momentForm(moment, position);
+      if (i == j) {
+        magnitude[i] = std::sqrt(std::max(gram[i][i], 0.0) + 1e-6 * moment.scale * x2);
+        zero[i] = moment.zero;
+      }
+    }
+  }
+  double total_magnitude = 0.0;
+  for (int i = 1; i < n; ++i) total_magnitude += magnitude[i];
+  double error[kMomentJoints];
+  // e^T G e, and sum_ij |e_i G_ij e_j|: what its roundings are relative to.
+  auto costOf = [&](unsigned mask, double* terms) {
+    for (int i = 0; i < n; ++i) error[i] = shares.floor_units[i] + ((mask >> i) & 1u) - shares.exact[i];
+    double sum = 0.0, size = 0.0;
+    for (int i = 1; i < n; ++i) {
+      double row = gram[i][i] * error[i], row_size = std::abs(gram[i][i] * error[i]);
+      for (int j = i + 1; j < n; ++j) {
+        row += 2.0 * gram[i][j] * error[j];
+        row_size += 2.0 * std::abs(gram[i][j] * error[j]);
+      }
+      sum += error[i] * row;
+      size += std::abs(error[i]) * row_size;
+    }
+    *terms = size;
+    return sum;
+  };
+  motionCandidates(shares, masks);
+  unsigned best = masks->front();
+  double best_terms = 0.0;
+  double best_cost = costOf(best, &best_terms);
+  const double tolerance = 1e-12 * std::max(1.0, best_cost);
+  // A cost's rounding error is within n * unit roundoff of its terms, both in the reference's
+  // evaluation and here: 4 n DBL_EPSILON covers the two with a factor of 4 to spare.
+  const double gamma = 4.0 * n * std::numeric_limits<double>::epsilon();
+  for (unsigned mask : *masks) {
+    if (mask == best) continue;
+    double differing = 0.0;
+    bool moves = false;
+    for (int i = 0; i < n; ++i) {
+      if (!(((mask ^ best) >> i) & 1u)) continue;
+      differing += magnitude[i];
+      moves |= !zero[i];
+    }
+    // Candidates that differ only where G's rows vanish have bit-identical costs in the reference
+    // (the terms they change are products with zeros): never better.
+    if (!moves) continue;
+    double terms = 0.0;
+    const double c = costOf(mask, &terms);
+    // The moments differ from the frame-by-frame sums by far less than 1e-9 of the terms they cancel
+    // (typically 1e-14); only the rows of the joints the two candidates differ in change the difference.
+    const double margin = c - (best_cost - tolerance);
+    if (std::abs(margin) <= 1e-9 * differing * total_magnitude + gamma * (terms + best_terms)) return false;
+    if (margin < 0.0) {
+      best_cost = c;
+      best = mask;
+      best_terms = terms;
+    }
+  }
+  *chosen = best;
+  *cost = best_cost;
+  *cost_error = 1e-9 * total_magnitude * total_magnitude + gamma * best_terms;
+  return true;
+}
+
+// worstFrameError() of the units `mask` gives, skinning the vertex frame by frame (the same arithmetic).
+double motionWorstFrame(const MotionShares& shares, unsigned mask, const Eigen::Vector3d& position,
+                        const std::vector<SkinFrame>& frames) {
+  double worst = 0.0;
+  double factor[kMomentJoints];
+  for (int i = 0; i < shares.n; ++i)
+    factor[i] = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+  for (const SkinFrame& frame : frames) {
+    Eigen::Vector3d error = Eigen::Vector3d::Zero();
+    for (int i = 0; i < shares.n; ++i) error += factor[i] * transformPoint(frame[shares.joints[i]], position);
+    worst = std::max(worst, error.norm() / kMilliScale);
+  }
+  return worst;
+}
+
+// An upper bound on |M v| / (|v| + 1) over every frame's skin matrices: how far a skin matrix can carry
+// a point, for bounding what rounding adds to a skinned position.
+double skinReach(const std::vector<SkinFrame>& frames) {
+  double reach = 1.0;
+  for (const SkinFrame& frame : frames)
+    for (const Eigen::Affine3d& m : frame) reach = std::max(reach, m.linear().norm() + m.translation().norm());
+  return reach * (1.0 + 1e-9);
+}
+
+void writeMotionUnits(const MotionShares& shares, unsigned mask, int slots, int v, QuantizedInfluences* out) {
+  std::vector<RoundingSlot> chosen(slots);
+  for (int i = 0; i < shares.n; ++i)
+    chosen[i] = RoundingSlot{shares.joints[i], shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)};
+  writeCanonical(chosen, slots, v, out);
+}
+
 }  // namespace
 
-QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
-                                      const std::vector<SkinFrame>& frames) {
+QuantizedInfluences quantizeForMotionReference(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                               const std::vector<SkinFrame>& frames) {
   QuantizedInfluences out = quantizeInfluences(set, kMilliScale);
   if (frames.empty()) return out;
   const int slots = set.slots_per_vertex;
@@ -196,20 +515,99 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
   const double part_worst = worst.empty() ? 0.0 : *std::max_element(worst.begin(), worst.end());
   for (int v = 0; v < set.vertexCount(); ++v) {
     if (worst[v] <= kRefineShare * part_worst) continue;
-    const VertexMotion motion = vertexMotion(set, v, bind_positions[v], frames);
-    // Pass 1's rounding is already in `out`; only a strictly better worst frame replaces it.
-    std::vector<int> best;
-    double best_worst = worst[v];
-    for (unsigned mask : candidateMasks(motion)) {
-      std::vector<int> units = unitsOf(motion, mask);
-      const double w = worstFrameError(motion, units, best_worst);
-      if (w < best_worst) {
-        best_worst = w;
-        best = std::move(units);
-      }
-    }
-    if (!best.empty()) writeUnits(motion, best, slots, v, &out);
+    refineVertex(set, v, bind_positions[v], frames, worst[v], &out);
   }
+  return out;
+}
+
+QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                      const std::vector<SkinFrame>& frames) {
+  return quantizeForMotion(set, bind_positions, frames, 1);
+}
+
+QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                      const std::vector<SkinFrame>& frames, int threads) {
+  QuantizedInfluences out = quantizeInfluences(set, kMilliScale);
+  if (frames.empty()) return out;
+  const int slots = set.slots_per_vertex;
+  const size_t vertex_count = static_cast<size_t>(set.vertexCount());
+  const MomentTable table = momentTable(set, frames, threads);
+
+  // Pass 1. `worst` is exact where `known`; elsewhere `bound` bounds it from above.
+  std::vector<double> worst(vertex_count, 0.0), bound(vertex_count, 0.0);
+  std::vector<char> known(vertex_count, 1);
+  std::vector<unsigned> chosen(vertex_count, 0);
+  // Per chunk, a lower bound on the part's worst: a vertex's worst frame is at least its root mean square.
+  std::vector<double> chunk_floor(parallelChunkCount(vertex_count, kVertexGrain), 0.0);
+  const double frame_count = static_cast<double>(frames.size());
+  const double skin_reach = skinReach(frames);
+  parallelFor(threads, vertex_count, kVertexGrain, [&](size_t chunk, size_t begin, size_t end) {
+    std::vector<unsigned> masks;
+    double lowest_worst = 0.0;
+    for (size_t v = begin; v < end; ++v) {
+      const int vertex = static_cast<int>(v);
+      const MotionShares shares = motionShares(set, vertex);
+      if (!shares.tooMany && !shares.choice()) continue;
+      unsigned mask = 0;
+      double cost = 0.0, cost_error = 0.0;
+      if (shares.tooMany || !momentMask(shares, bind_positions[v], table, &masks, &mask, &cost, &cost_error)) {
+        const VertexMotion motion = vertexMotion(set, vertex, bind_positions[v], frames);
+        if (!hasChoice(motion)) continue;
+        const std::vector<int> units = unitsOf(motion, leastSquaresMask(motion, candidateMasks(motion)));
+        worst[v] = worstFrameError(motion, units);
+        writeUnits(motion, units, slots, vertex, &out);
+        lowest_worst = std::max(lowest_worst, worst[v]);
+        continue;
+      }
+      chosen[v] = mask;
+      writeMotionUnits(shares, mask, slots, vertex, &out);
+      // |r(t)| <= |sum_i e_i d_i(t)| + |sum_i e_i| |M_0(t) v|: the second term is rounding only.
+      double sum_error = 0.0, largest = 0.0;
+      for (int i = 0; i < shares.n; ++i) {
+        const double e = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+        sum_error += e;
+        largest = std::max(largest, std::abs(e));
+      }
+      // The positions' magnitude times the shares' rounding: sum_i e_i is 0 up to rounding, and the
+      // reference adds e_i M_i v with roundings relative to |M_i v|.
+      const double rounding = (std::abs(sum_error) + 1e-12 * largest) * skin_reach * (bind_positions[v].norm() + 1.0);
+      const double squares = std::max(cost, 0.0);
+      bound[v] = (std::sqrt(squares + cost_error) + rounding) * (1.0 + 1e-9) / kMilliScale;
+      known[v] = 0;
+      lowest_worst = std::max(lowest_worst, (std::sqrt(std::max(squares - cost_error, 0.0) / frame_count) * (1.0 - 1e-9) -
+                                             rounding) / kMilliScale);
+    }
+    chunk_floor[chunk] = lowest_worst;
+  });
+
+  // The part's worst: only vertices whose bound reaches the largest lower bound can hold it.
+  const double worst_floor = *std::max_element(chunk_floor.begin(), chunk_floor.end());
+  auto settle = [&](double threshold) {
+    parallelFor(threads, vertex_count, kVertexGrain, [&](size_t, size_t begin, size_t end) {
+      for (size_t v = begin; v < end; ++v) {
+        if (known[v] || bound[v] < threshold) continue;
+        worst[v] = motionWorstFrame(motionShares(set, static_cast<int>(v)), chosen[v], bind_positions[v], frames);
+        known[v] = 1;
+      }
+    });
+  };
+  settle(worst_floor);
+  double part_worst = 0.0;
+  for (size_t v = 0; v < vertex_count; ++v)
+    if (known[v]) part_worst = std::max(part_worst, worst[v]);
+  // Every vertex that could be above kRefineShare of it gets its exact worst frame.
+  settle(kRefineShare * part_worst);
+
+  // Pass 2 on the vertices that could decide the part's worst error.
+  std::vector<int> refine;
+  for (size_t v = 0; v < vertex_count; ++v) {
+    if (!known[v] || worst[v] <= kRefineShare * part_worst) continue;
+    refine.push_back(static_cast<int>(v));
+  }
+  parallelForEach(threads, refine.size(), [&](size_t r) {
+    const int v = refine[r];
+    refineVertex(set, v, bind_positions[v], frames, worst[v], &out);
+  });
   return out;
 }
 

@@ -20,5 +20,13 @@ using SkinFrame = std::vector<Eigen::Affine3d>;
 // good as such roundings allow. Canonical slot order as in influences.h.
 QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                       const std::vector<SkinFrame>& frames);
+// The same on `threads` threads (pipeline/parallel.h): the result does not depend on the count.
+QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                      const std::vector<SkinFrame>& frames, int threads);
+
+// The same roundings computed the direct way, frame by frame for every vertex (slow: O(frames n^2) per
+// vertex). quantizeForMotion() must give exactly these; the tests compare the two.
+QuantizedInfluences quantizeForMotionReference(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                               const std::vector<SkinFrame>& frames);
 
 }  // namespace rigbake

@@ -20,6 +20,7 @@
 #include <map>
 
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
 #include "pipeline/skin_volume.h"
 
@@ -67,6 +68,7 @@ struct FitPart {
   VolumeSurface surface;
   std::vector<ClosedPatch> regions;
   std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per welded vertex
+  std::vector<int> muscle_welded;  // the welded vertices with muscle vertices, ascending
 };
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
@@ -87,7 +89,8 @@ bool hasPresetResponse(const MusclePart& part) {
 
 ResponseFitReport fitMuscleResponses(const Character& character, const std::vector<BodyRegion>& regions,
                                      const std::vector<MeasuredPart>& parts, const std::vector<Pose>& poses,
-                                     const std::vector<char>& fit, MuscleSet* muscles, const ResponseFitOptions& options) {
+                                     const std::vector<char>& fit, MuscleSet* muscles, const ResponseFitOptions& options,
+                                     int threads) {
   const Skeleton& skeleton = character.skeleton;
   const int joint_count = skeleton.size();
   const int muscle_count = static_cast<int>(muscles->parts.size());
@@ -149,6 +152,16 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   std::vector<FitPart> fit_parts;
   std::vector<Eigen::Affine3d> bind_inverse(muscle_count);
   for (int m = 0; m < muscle_count; ++m) bind_inverse[m] = muscleBindTransform(muscles->parts[m], skeleton).inverse();
+  // Per muscle, what the Jacobian's inner loop needs and the fit does not change: the skinned joint's
+  // bind axes, its side and its keys' shapes.
+  std::vector<Eigen::Matrix3d> bind_axes(muscle_count);
+  std::vector<double> side_sign(muscle_count);
+  std::vector<std::array<KeyShape, kKeys>> shapes(muscle_count);
+  for (int m = 0; m < muscle_count; ++m) {
+    bind_axes[m] = bind_inverse[m].inverse().linear();
+    side_sign[m] = muscles->parts[m].side == "Right" ? -1.0 : 1.0;
+    for (int k = 0; k < kKeys; ++k) shapes[m][k] = keyShape(muscles->parts[m], k);
+  }
   for (size_t p = 0; p < parts.size(); ++p) {
     FitPart part;
     part.mesh = &character.meshes[parts[p].mesh_part];
@@ -165,6 +178,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         if (m < 0 || m >= muscle_count || kind[m] < 0 || weight <= 0.0) continue;
         part.muscle_vertices[w].push_back({m, weight, bind_inverse[m] * part.mesh->positions[v]});
       }
+      if (!part.muscle_vertices[w].empty()) part.muscle_welded.push_back(w);
     }
     fit_parts.push_back(std::move(part));
   }
@@ -173,17 +187,17 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   for (size_t r : kept) bind_region.push_back(measured.region_volumes[r]);
   // Input-skinning region changes per pose: the dead zones do not depend on the fit.
   std::vector<std::vector<double>> input_region_change(poses.size(), std::vector<double>(region_count, 0.0));
-  for (size_t i = 0; i < poses.size(); ++i) {
+  parallelForEach(threads, poses.size(), [&](size_t i) {
     std::vector<Eigen::Affine3d> frame(joint_count);
     for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(poses[i], skeleton, j);
     std::vector<double> volume(region_count, 0.0);
+    std::vector<Eigen::Vector3d> welded;
     for (const FitPart& part : fit_parts) {
-      const std::vector<Eigen::Vector3d> welded =
-          weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame));
+      skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.surface.vertex_of_weld, &welded);
       for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
     }
     for (int r = 0; r < region_count; ++r) input_region_change[i][r] = signedChange(volume[r], bind_region[r]);
-  }
+  });
 
   // How far the poses drive each key (its largest hat weight): the prior bounds the response the poses
   // actually see, so a key the clips barely reach cannot grow without limit, and a key they never
@@ -211,10 +225,16 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   for (int iteration = 0; iteration <= options.iterations; ++iteration) {
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
-    std::vector<Eigen::VectorXd> rows;
-    std::vector<double> rhs;
-    double body_squares = 0.0;
-    for (size_t i = 0; i < poses.size(); ++i) {
+    // Each pose's rows are built on its own and joined in pose order, so any thread count gives the
+    // same system. The last pass only measures: its Jacobian rows would be thrown away.
+    const bool measure_only = iteration == options.iterations;
+    struct PoseRows {
+      std::vector<Eigen::VectorXd> rows;
+      std::vector<double> rhs;
+      double body_square = 0.0;
+    };
+    std::vector<PoseRows> pose_rows(poses.size());
+    parallelForEach(threads, poses.size(), [&](size_t i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
       std::vector<Eigen::Affine3d> frame(joint_count + muscle_count);
@@ -222,17 +242,22 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       for (int m = 0; m < muscle_count; ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, m) * bind_inverse[m];
       std::vector<std::array<double, kKeys>> key_weight(muscle_count);
       for (int m = 0; m < muscle_count; ++m) keyWeights(muscles->parts[m], evaluation.drivers[m], key_weight[m].data());
+      // d p / d (offset up) and d p / d (scale): the skinned joint's rest axes as posed.
+      std::vector<Eigen::Matrix3d> axes(muscle_count);
+      for (int m = 0; m < muscle_count; ++m) axes[m] = frame[muscleCarrierJoint(muscles->parts[m])].linear() * bind_axes[m];
 
-      std::vector<std::vector<Eigen::Vector3d>> posed;
+      std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size());
       double body = 0.0;
       std::vector<double> region_volume(region_count, 0.0);
-      for (const FitPart& part : fit_parts) {
-        posed.push_back(weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame)));
-        body += enclosedVolume(part.surface.whole, posed.back());
-        for (int r = 0; r < region_count; ++r) region_volume[r] += enclosedVolume(part.regions[r], posed.back());
+      for (size_t p = 0; p < fit_parts.size(); ++p) {
+        const FitPart& part = fit_parts[p];
+        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.surface.vertex_of_weld, &posed[p]);
+        body += enclosedVolume(part.surface.whole, posed[p]);
+        for (int r = 0; r < region_count; ++r) region_volume[r] += enclosedVolume(part.regions[r], posed[p]);
       }
       const double body_change = signedChange(body, bind_body);
-      body_squares += body_change * body_change;
+      PoseRows& out = pose_rows[i];
+      out.body_square = body_change * body_change;
       // Rows: the body always; a region when it leaves its dead zone (then towards the nearer edge).
       struct Row {
         int region;  // -1: the whole body
@@ -248,36 +273,43 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const double target = change < lower ? lower : upper;
         active.push_back({r, options.region_weight / std::abs(bind_region[r]), change - target});
       }
+      std::vector<Eigen::Vector3d> gradient;
       for (const Row& row : active) {
+        out.rhs.push_back(-row.weight * std::abs(row.region < 0 ? bind_body : bind_region[row.region]) * row.residual);
+        if (measure_only) continue;
         Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
         for (size_t p = 0; p < fit_parts.size(); ++p) {
           const FitPart& part = fit_parts[p];
-          std::vector<Eigen::Vector3d> gradient(part.surface.weldedCount(), Eigen::Vector3d::Zero());
+          gradient.assign(part.surface.weldedCount(), Eigen::Vector3d::Zero());
           addVolumeGradient(row.region < 0 ? part.surface.whole : part.regions[row.region], posed[p], 1.0, &gradient);
-          for (int w = 0; w < part.surface.weldedCount(); ++w) {
-            if (part.muscle_vertices[w].empty() || gradient[w].isZero()) continue;
+          for (int w : part.muscle_welded) {
+            if (gradient[w].isZero()) continue;
             for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-              // d p / d (offset up) and d p / d (scale): the skinned joint's rest axes as posed.
-              const Eigen::Matrix3d axes =
-                  frame[muscleCarrierJoint(muscles->parts[mv.muscle])].linear() * bind_inverse[mv.muscle].inverse().linear();
-              const MusclePart& part = muscles->parts[mv.muscle];
-              const double side_sign = part.side == "Right" ? -1.0 : 1.0;
-              const double along_up = mv.weight * gradient[w].dot(axes.col(1));
-              const double along_side = mv.weight * side_sign * gradient[w].dot(axes.col(2));
-              const double along_scale = mv.weight * gradient[w].dot(axes.col(1) * mv.q.y() + axes.col(2) * mv.q.z());
+              const Eigen::Matrix3d& muscle_axes = axes[mv.muscle];
+              const double along_up = mv.weight * gradient[w].dot(muscle_axes.col(1));
+              const double along_side = mv.weight * side_sign[mv.muscle] * gradient[w].dot(muscle_axes.col(2));
+              const double along_scale =
+                  mv.weight * gradient[w].dot(muscle_axes.col(1) * mv.q.y() + muscle_axes.col(2) * mv.q.z());
               const int base = kind[mv.muscle] * kKeys;
               for (int k = 0; k < kKeys; ++k) {
                 const double phi = key_weight[mv.muscle][k];
                 if (phi == 0.0) continue;
-                const KeyShape shape = keyShape(part, k);
+                const KeyShape& shape = shapes[mv.muscle][k];
                 jacobian[base + k] += phi * (shape.up * along_up + shape.side * along_side + shape.scale * along_scale);
               }
             }
           }
         }
-        rows.push_back(row.weight * jacobian);
-        rhs.push_back(-row.weight * std::abs(row.region < 0 ? bind_body : bind_region[row.region]) * row.residual);
+        out.rows.push_back(row.weight * jacobian);
       }
+    });
+    std::vector<Eigen::VectorXd> rows;
+    std::vector<double> rhs;
+    double body_squares = 0.0;
+    for (PoseRows& pose : pose_rows) {
+      body_squares += pose.body_square;
+      rhs.insert(rhs.end(), pose.rhs.begin(), pose.rhs.end());
+      for (Eigen::VectorXd& row : pose.rows) rows.push_back(std::move(row));
     }
     const double rms = std::sqrt(body_squares / static_cast<double>(poses.size()));
     if (iteration == 0) report.body_rms_before = rms;

@@ -52,11 +52,12 @@ struct ResponseFitReport {
 // Fits the response of every part with fit[m] set (parts of the same name on both sides share one
 // set of keys, mirrored); the others keep theirs and are evaluated as they are. `parts` holds each
 // skinned part's input weights and its muscle-added full-precision weights (muscle m is joint
-// skeleton.size() + m); every part's carrier must be chosen. `poses` are the poses to fit over.
+// skeleton.size() + m); every part's carrier must be chosen. `poses` are the poses to fit over, on
+// `threads` threads (pipeline/parallel.h; the result is the same at any count).
 ResponseFitReport fitMuscleResponses(const Character& character, const std::vector<BodyRegion>& regions,
                                      const std::vector<MeasuredPart>& parts, const std::vector<Pose>& poses,
                                      const std::vector<char>& fit, MuscleSet* muscles,
-                                     const ResponseFitOptions& options = {});
+                                     const ResponseFitOptions& options = {}, int threads = 1);
 
 // True when `part` still has the response its preset gives it (defaultMuscleResponse()): what
 // `bake --response auto` fits. Curves that were fitted before or edited by hand are kept.

@@ -17,6 +17,12 @@ std::vector<Eigen::Vector3d> skinLinearBlend(const std::vector<Eigen::Vector3d>&
                                              const InfluenceSet& influences,
                                              const std::vector<Eigen::Affine3d>& frame);
 
+// The same for the listed vertices only, into (*posed)[i] for vertices[i] (resized to fit, so a caller
+// can reuse it): skinLinearBlend(...)[vertices[i]] to the bit, e.g. a VolumeSurface's welded vertices.
+void skinLinearBlend(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& influences,
+                     const std::vector<Eigen::Affine3d>& frame, const std::vector<int>& vertices,
+                     std::vector<Eigen::Vector3d>* posed);
+
 // Each skin matrix split once per frame into what dual quaternions blend (rotation and translation)
 // and what they cannot (the symmetric stretch of the polar decomposition, M = T R S).
 struct DualQuaternionFrame {
@@ -33,5 +39,10 @@ DualQuaternionFrame dualQuaternionFrame(const std::vector<Eigen::Affine3d>& fram
 // applied first, in bind space.
 std::vector<Eigen::Vector3d> skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions,
                                                 const InfluenceSet& influences, const DualQuaternionFrame& frame);
+
+// The same for the listed vertices only, as the skinLinearBlend() overload above.
+void skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& influences,
+                        const DualQuaternionFrame& frame, const std::vector<int>& vertices,
+                        std::vector<Eigen::Vector3d>* posed);
 
 }  // namespace rigbake

@@ -1,0 +1,190 @@
+// The bake on several threads: parallelFor's contract (every index once, chunks fixed by the grain,
+// the serial loop's exception), the fast motion-aware rounding against the direct one, and bakes that
+// give the same bytes and figures at 1, 2 and 3 threads.
+#include <atomic>
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "anatomy/placement.h"
+#include "cli_support.h"
+#include "formats/gltf_bake.h"
+#include "formats/gltf_document.h"
+#include "formats/gltf_write.h"
+#include "pipeline/bake.h"
+#include "pipeline/parallel.h"
+#include "pipeline/pose.h"
+#include "pipeline/quantize_for_motion.h"
+#include "anatomy_fixture.h"
+
+namespace rigbake {
+namespace {
+
+// Skin matrices at every key time of every clip (the assets' own motion, no muscles).
+std::vector<SkinFrame> ownClipFrames(const Character& character) {
+  std::vector<SkinFrame> frames;
+  for (const Clip& clip : character.clips) {
+    for (double time : sampleTimes(clip, 0.0)) {
+      const Pose pose = sampleClip(character.skeleton, clip, time);
+      SkinFrame skin(character.skeleton.size());
+      for (int j = 0; j < character.skeleton.size(); ++j) skin[j] = skinMatrix(pose, character.skeleton, j);
+      frames.push_back(std::move(skin));
+    }
+  }
+  return frames;
+}
+
+bool sameQuantized(const QuantizedInfluences& a, const QuantizedInfluences& b) {
+  return a.slots_per_vertex == b.slots_per_vertex && a.full_scale == b.full_scale && a.joints == b.joints &&
+         a.weights == b.weights;
+}
+
+struct ThreadedBake {
+  std::string bytes;
+  BakeResult bake;
+};
+
+ThreadedBake bakeWithThreads(const std::string& path, int threads, GltfWeights weights = GltfWeights::kMilli) {
+  test::Resolved resolved = test::resolveShipped(path);
+  LoadedCharacter loaded = loadCharacter(path);
+  const MuscleSet muscles = placeMuscles(loaded.character, resolved.landmarks, test::gowPreset(), Sides::kBoth);
+  BakeOptions options;
+  options.influences = 10;
+  options.gltf_weights = weights;
+  options.threads = threads;
+  ThreadedBake out;
+  out.bake = bakeCharacter(loaded.character, muscles, options);
+  out.bytes = serializeGltf(bakedModel(*loaded.document, loaded.character, out.bake), true);
+  return out;
+}
+
+void requireSameError(const DeformationError& a, const DeformationError& b) {
+  CHECK(a.max_displacement == b.max_displacement);
+  CHECK(a.rms_displacement == b.rms_displacement);
+  CHECK(a.max_vertex == b.max_vertex);
+  CHECK(a.vertex_count == b.vertex_count);
+}
+
+void requireSameFigures(const DeformationFigures& a, const DeformationFigures& b) {
+  REQUIRE(a.per_clip.size() == b.per_clip.size());
+  requireSameError(a.overall, b.overall);
+  CHECK(a.peak_clip == b.peak_clip);
+  for (size_t c = 0; c < a.per_clip.size(); ++c) {
+    requireSameError(a.per_clip[c], b.per_clip[c]);
+    CHECK(a.peaks[c].mesh_part == b.peaks[c].mesh_part);
+    CHECK(a.peaks[c].vertex == b.peaks[c].vertex);
+    CHECK(a.peaks[c].time == b.peaks[c].time);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("parallel: every index runs once, in chunks fixed by the grain, at any thread count") {
+  for (int threads : {1, 2, 3, 8}) {
+    for (size_t count : {size_t(0), size_t(1), size_t(7), size_t(1000)}) {
+      std::vector<std::atomic<int>> seen(count);
+      std::vector<std::pair<size_t, size_t>> chunks(parallelChunkCount(count, 16));
+      parallelFor(threads, count, 16, [&](size_t chunk, size_t begin, size_t end) {
+        chunks[chunk] = {begin, end};
+        for (size_t i = begin; i < end; ++i) ++seen[i];
+      });
+      for (size_t i = 0; i < count; ++i) CHECK(seen[i] == 1);
+      for (size_t c = 0; c < chunks.size(); ++c) {
+        CHECK(chunks[c].first == c * 16);
+        CHECK(chunks[c].second == std::min(count, (c + 1) * 16));
+      }
+    }
+  }
+  CHECK(resolveThreadCount(3) == 3);
+  CHECK(resolveThreadCount(0) >= 1);
+}
+
+TEST_CASE("parallel: a failing body rethrows the exception of the lowest chunk that threw, as a serial loop would") {
+  for (int threads : {1, 2, 4}) {
+    std::atomic<int> ran{0};
+    try {
+      parallelForEach(threads, 200, [&](size_t i) {
+        ++ran;
+        if (i == 37 || i == 150) throw std::runtime_error("chunk " + std::to_string(i));
+      });
+      FAIL("no exception");
+    } catch (const std::runtime_error& e) {
+      CHECK(std::string(e.what()) == "chunk 37");
+    }
+    CHECK(ran >= 38);  // every chunk up to the one that threw ran
+  }
+}
+
+TEST_CASE("parallel: a loop inside a parallel body runs serially on its worker") {
+  std::atomic<int> total{0};
+  parallelForEach(2, 4, [&](size_t) { parallelForEach(2, 10, [&](size_t) { ++total; }); });
+  CHECK(total == 40);
+}
+
+TEST_CASE("quantizeForMotion: the moment-based pass gives exactly the frame-by-frame roundings, at any thread count") {
+  for (const std::string& path : test::sampleAndAssetPaths()) {
+    const Character character = loadCharacter(path).character;
+    const std::vector<SkinFrame> frames = ownClipFrames(character);
+    if (frames.empty()) continue;  // no clips: largest remainder either way
+    for (const MeshPart& mesh : character.meshes) {
+      if (!mesh.skinned || mesh.positions.empty()) continue;
+      for (int influences : {4, 10}) {
+        INFO(path << " mesh " << mesh.name << ", " << influences << " influences");
+        const InfluenceSet pruned = pruneInfluences(influencesFromMesh(mesh), influences);
+        const QuantizedInfluences reference = quantizeForMotionReference(pruned, mesh.positions, frames);
+        CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames), reference));
+        CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames, 2), reference));
+        CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames, 3), reference));
+      }
+    }
+  }
+}
+
+TEST_CASE("bake: the same bytes and figures at 1, 2 and 3 threads") {
+  std::vector<std::string> paths = {test::sampleGlbPath()};
+  // The asset with the most clips: the most frames for every per-frame loop.
+  const std::string most_clips = test::requireAsset("Quaternius_Cyberpunk_Character.glb");
+  if (!most_clips.empty()) paths.push_back(most_clips);
+  for (const std::string& path : paths) {
+    INFO(path);
+    const ThreadedBake one = bakeWithThreads(path, 1, GltfWeights::kUnorm16);
+    for (int threads : {2, 3}) {
+      const ThreadedBake many = bakeWithThreads(path, threads, GltfWeights::kUnorm16);
+      CHECK(many.bytes == one.bytes);
+      requireSameFigures(many.bake.error, one.bake.error);
+      requireSameFigures(many.bake.gltf_error, one.bake.gltf_error);
+      CHECK(many.bake.fit.body_rms_after == one.bake.fit.body_rms_after);
+      REQUIRE(many.bake.quality.clips.size() == one.bake.quality.clips.size());
+      for (size_t c = 0; c < one.bake.quality.clips.size(); ++c) {
+        CHECK(many.bake.quality.clips[c].body.rig.change == one.bake.quality.clips[c].body.rig.change);
+        CHECK(many.bake.quality.clips[c].body.dual_quaternion.change == one.bake.quality.clips[c].body.dual_quaternion.change);
+        CHECK(many.bake.quality.clips[c].worst_frame == one.bake.quality.clips[c].worst_frame);
+      }
+    }
+  }
+}
+
+TEST_CASE("cli bake --threads: byte-identical files and stats at 1 and 2 threads") {
+  test::TempDir dir;
+  for (const char* threads : {"1", "2"}) {
+    const std::string n = threads;
+    REQUIRE(test::runCli("bake " + test::sampleGlbPathForCli() + " --influences 10 --jiggle biceps --threads " + n +
+                         " -o " + (dir / (n + ".glb")) + " --stats " + (dir / (n + ".json")) + " --packed-out " +
+                         (dir / (n + ".rbpk")) + " --muscles-out " + (dir / (n + ".muscles.json")))
+                .exit_code == 0);
+  }
+  CHECK(test::slurp(dir / "1.glb") == test::slurp(dir / "2.glb"));
+  CHECK(test::slurp(dir / "1.rbpk") == test::slurp(dir / "2.rbpk"));
+  CHECK(test::slurp(dir / "1.muscles.json") == test::slurp(dir / "2.muscles.json"));
+  // The stats name their own output file, so compare them without it.
+  nlohmann::json a = nlohmann::json::parse(test::slurp(dir / "1.json")), b = nlohmann::json::parse(test::slurp(dir / "2.json"));
+  a.erase("output");
+  b.erase("output");
+  CHECK(a == b);
+  CHECK(test::runCli("bake " + test::sampleGlbPathForCli() + " --threads -1 -o " + (dir / "x.glb")).exit_code == 1);
+}
+
+}  // namespace rigbake
