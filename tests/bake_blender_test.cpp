@@ -12,14 +12,22 @@
 using namespace rigbake;
 namespace ext = rigbake::test::external;
 
-TEST_CASE("bake: Blender imports every baked file with the muscle bones and their vertex groups") {
+TEST_CASE("bake: Blender imports every baked file with the muscle bones and their vertex groups, in every muscle motion mode") {
   if (!ext::requireTool(ext::onPath("blender"), "blender (Debian package blender)")) return;
   test::TempDir dir;
   std::vector<std::string> inputs = test::sampleAndAssetPaths();
   std::vector<GltfWeights> weights(inputs.size(), GltfWeights::kMilli);
-  // The sample once more with --gltf-weights unorm16.
+  std::vector<MuscleMotion> motions(inputs.size(), MuscleMotion::kRuntime);
+  // The sample once more with --gltf-weights unorm16, and with its muscles sampled into the clips
+  // (--muscle-motion sampled and both, the modes a player without the runtime plays).
   inputs.push_back(inputs.front());
   weights.push_back(GltfWeights::kUnorm16);
+  motions.push_back(MuscleMotion::kRuntime);
+  for (MuscleMotion motion : {MuscleMotion::kSampled, MuscleMotion::kBoth}) {
+    inputs.push_back(inputs.front());
+    weights.push_back(GltfWeights::kMilli);
+    motions.push_back(motion);
+  }
   std::vector<std::string> baked_paths;
   std::vector<std::vector<std::string>> expected_bones;
   for (size_t i = 0; i < inputs.size(); ++i) {
@@ -29,6 +37,7 @@ TEST_CASE("bake: Blender imports every baked file with the muscle bones and thei
     BakeOptions options;
     options.influences = 7;
     options.gltf_weights = weights[i];
+    options.motion = motions[i];
     BakeResult bake = bakeCharacter(loaded.character, muscles, options);
     std::string out = dir / ("baked" + std::to_string(i) + ".glb");
     writeGltf(bakedModel(*loaded.document, loaded.character, bake), out);

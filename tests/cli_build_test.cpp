@@ -79,7 +79,7 @@ std::vector<std::string> namesBuilt(const std::string& json_out) {
 
 }  // namespace
 
-TEST_CASE("cli build: every character gets its outputs and a summary; a broken one fails the run, not the others") {
+TEST_CASE("cli build: every character gets its outputs and a summary, a broken one fails the run, not the others") {
   test::TempDir dir;
   // A truncated GLB: the loader must reject it, and the build must go on with the others.
   const std::string hero_bytes = slurp(test::sampleGlbPathForCli());

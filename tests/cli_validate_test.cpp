@@ -115,7 +115,7 @@ TEST_CASE("cli validate: without --muscles the muscle checks are skipped and the
   CHECK(checkIn(report, "GLTF_STRUCTURE")["status"] == "pass");
 }
 
-TEST_CASE("cli validate: --config overrides a threshold; a malformed config is exit 3 and writes nothing") {
+TEST_CASE("cli validate: --config overrides a threshold, a malformed config is exit 3 and writes nothing") {
   const CliBake& bake = cliBake();
   test::TempDir out;
   const std::string config = out / "config.json";

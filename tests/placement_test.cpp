@@ -47,7 +47,7 @@ TEST_CASE("every character resolves every required landmark") {
   }
 }
 
-TEST_CASE("every shared character resolves hip, knee and ankle per side; the toe where the rig has one") {
+TEST_CASE("every shared character resolves hip, knee and ankle per side, and the toe where the rig has one") {
   // name -> {upper_leg_l, lower_leg_l, foot_l, toe_l ("" when the rig has no toe joint)}
   const std::map<std::string, std::array<std::string, 4>> expected = {
       {"sample", {"JOLeftUpLeg1", "JOLeftLeg1", "JOLeftFoot1", "JOLeftToe1"}},

@@ -326,7 +326,7 @@ TEST_CASE(
   }
 }
 
-TEST_CASE("a character without legs gets the arm and trunk clips; asking for a leg clip is ROM_CLIP_UNAVAILABLE") {
+TEST_CASE("a character without legs gets the arm and trunk clips, and asking for a leg clip is ROM_CLIP_UNAVAILABLE") {
   const test::Resolved full = test::resolveShipped(test::sampleGlbPath());
   const test::Resolved legless = test::resolveWithShippedPresets(test::withoutLegs(full.character));
   const RomResult rom = buildRom(legless.character, legless.landmarks, defaultRom());
