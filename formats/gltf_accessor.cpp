@@ -10,18 +10,6 @@
 namespace rigbake {
 namespace {
 
-int componentCount(int type) {
-  switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT2: return 4;
-    case TINYGLTF_TYPE_MAT3: return 9;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
-  }
-}
 
 int componentSize(int component_type) {
   switch (component_type) {
@@ -85,13 +73,26 @@ const unsigned char* viewRange(const tinygltf::Model& model, int buffer_view, si
 
 }  // namespace
 
+int accessorComponentCount(int type) {
+  switch (type) {
+    case TINYGLTF_TYPE_SCALAR: return 1;
+    case TINYGLTF_TYPE_VEC2: return 2;
+    case TINYGLTF_TYPE_VEC3: return 3;
+    case TINYGLTF_TYPE_VEC4: return 4;
+    case TINYGLTF_TYPE_MAT2: return 4;
+    case TINYGLTF_TYPE_MAT3: return 9;
+    case TINYGLTF_TYPE_MAT4: return 16;
+    default: return 0;
+  }
+}
+
 AccessorData readAccessor(const tinygltf::Model& model, int accessor_index, const std::string& where) {
   const std::string what = "/accessors/" + std::to_string(accessor_index);
   if (accessor_index < 0 || accessor_index >= static_cast<int>(model.accessors.size()))
     fail("GLTF_ACCESSOR_INVALID", where, what + " does not exist");
   const tinygltf::Accessor& accessor = model.accessors[accessor_index];
   AccessorData out;
-  out.components = componentCount(accessor.type);
+  out.components = accessorComponentCount(accessor.type);
   int size = componentSize(accessor.componentType);
   if (out.components == 0 || size == 0) fail("GLTF_ACCESSOR_INVALID", where, what + " has an unknown type");
   if (accessor.count > (1 << 28)) fail("GLTF_ACCESSOR_INVALID", where, what + " has an implausible count");

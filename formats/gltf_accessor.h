@@ -17,6 +17,9 @@ struct AccessorData {
   std::vector<double> values;  // count * components, element-major
 };
 
+// Numbers per element of a glTF accessor type (TINYGLTF_TYPE_SCALAR ... MAT4); 0 for an unknown type.
+int accessorComponentCount(int type);
+
 // `where` names the file for error messages. Throws GLTF_ACCESSOR_INVALID on any range problem.
 AccessorData readAccessor(const tinygltf::Model& model, int accessor, const std::string& where);
 

@@ -33,6 +33,7 @@
 #include <nlohmann/json.hpp>
 
 #include "anatomy/error.h"
+#include "formats/gltf_accessor.h"
 #include "formats/gltf_json_value.h"
 
 namespace rigbake {
@@ -158,18 +159,6 @@ bool dropDatalessFallbacks(nlohmann::json* gltf) {
 
 // ---- After tinygltf: the model ----
 
-int componentCount(int type) {
-  switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT2: return 4;
-    case TINYGLTF_TYPE_MAT3: return 9;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
-  }
-}
 
 int componentBytes(int component_type) {
   switch (component_type) {
@@ -311,7 +300,7 @@ void appendConverted(const draco::PointAttribute& attribute, draco::PointIndex p
 size_t convertAttribute(const draco::Mesh& mesh, const draco::PointAttribute& attribute,
                         const tinygltf::Accessor& accessor, std::vector<unsigned char>* out, ComponentBounds* bounds,
                         bool* ok) {
-  const int components = componentCount(accessor.type);
+  const int components = accessorComponentCount(accessor.type);
   const size_t element = static_cast<size_t>(componentBytes(accessor.componentType)) * components;
   const size_t stride = (element + 3) / 4 * 4;
   bounds->min.assign(components, std::numeric_limits<double>::infinity());
@@ -424,7 +413,7 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
     tinygltf::Accessor& accessor = model->accessors[accessor_index];
     if (!attribute)
       fail("GLTF_PARSE_FAILED", where, pointer + "/attributes/" + semantic + " names no attribute of the Draco mesh");
-    const int components = componentCount(accessor.type);
+    const int components = accessorComponentCount(accessor.type);
     if (components == 0 || components > 16 || componentBytes(accessor.componentType) == 0 ||
         attribute->num_components() != components || accessor.count != mesh.num_points())
       fail("GLTF_ACCESSOR_INVALID", where,

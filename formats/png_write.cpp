@@ -1,8 +1,10 @@
 #include "formats/png_write.h"
 
+
 #include <png.h>
 
 #include "anatomy/error.h"
+#include "formats/base64.h"
 
 namespace rigbake {
 
@@ -24,28 +26,6 @@ std::string encodePng(const RgbImage& image) {
   return out;
 }
 
-std::string pngDataUri(const RgbImage& image) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  const std::string bytes = encodePng(image);
-  std::string out = "data:image/png;base64,";
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8) |
-                       static_cast<unsigned char>(bytes[i + 2]);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += kAlphabet[(v >> 6) & 63];
-    out += kAlphabet[v & 63];
-  }
-  if (i < bytes.size()) {
-    unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
-    if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += i + 1 < bytes.size() ? kAlphabet[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
+std::string pngDataUri(const RgbImage& image) { return "data:image/png;base64," + base64Encode(encodePng(image)); }
 
 }  // namespace rigbake

@@ -1,5 +1,6 @@
 #include "formats/view_page.h"
 
+
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -9,6 +10,7 @@
 #include <system_error>
 
 #include "anatomy/error.h"
+#include "formats/base64.h"
 #include "formats/atomic_file.h"
 
 namespace rigbake {
@@ -69,30 +71,6 @@ const char* kViewPageStyle = R"css(
 
 }  // namespace
 
-std::string viewPageBase64(const std::string& bytes) {
-  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((bytes.size() + 2) / 3 * 4);
-  size_t i = 0;
-  for (; i + 2 < bytes.size(); i += 3) {
-    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (static_cast<unsigned char>(bytes[i + 1]) << 8) |
-                       static_cast<unsigned char>(bytes[i + 2]);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += kAlphabet[(v >> 6) & 63];
-    out += kAlphabet[v & 63];
-  }
-  if (i < bytes.size()) {
-    const bool two = i + 1 < bytes.size();
-    const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) | (two ? static_cast<unsigned char>(bytes[i + 1]) << 8 : 0);
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += two ? kAlphabet[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
-
 std::string viewPageHtml(const std::string& title) {
   std::string html;
   html += "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
@@ -113,7 +91,7 @@ std::string viewPageHtml(const std::string& title) {
 
 std::string viewModelScript(const std::string& glb) {
   return "// The GLB rigbake view was given, as base64 (a file:// page cannot read a binary file beside it).\n"
-         "window.RIGBAKE_MODEL = \"" + viewPageBase64(glb) + "\";\n";
+         "window.RIGBAKE_MODEL = \"" + base64Encode(glb) + "\";\n";
 }
 
 std::map<std::string, std::string> viewPageFiles(const std::string& title, const std::string& glb,

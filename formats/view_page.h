@@ -19,8 +19,6 @@ inline constexpr const char* kViewModelFile = "model.js";
 // In index.html, so that `rigbake view` recognises a page it wrote before and may replace it.
 inline constexpr const char* kViewGenerator = "rigbake view";
 
-// Standard base64 (RFC 4648, with padding).
-std::string viewPageBase64(const std::string& bytes);
 
 // index.html for a page showing `title` (the file name; escaped here).
 std::string viewPageHtml(const std::string& title);

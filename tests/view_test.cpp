@@ -21,6 +21,7 @@
 #include "external_tools.h"
 #include "formats/baked_gltf.h"
 #include "formats/gltf_document.h"
+#include "formats/base64.h"
 #include "formats/view_page.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/pack_influences.h"
@@ -87,7 +88,7 @@ std::string doublesBase64(const std::vector<Eigen::Vector3d>& points) {
       std::memcpy(&bytes[(3 * v + c) * sizeof(double)], &value, sizeof(double));  // little endian, as the page reads it
     }
   }
-  return viewPageBase64(bytes);
+  return base64Encode(bytes);
 }
 
 // The muscle matrices, drivers and helpers of the C++ runtime at `fractions` of every clip's
@@ -365,7 +366,7 @@ TEST_CASE("rigbake view: bad input, help, atomic and deterministic output") {
     CHECK(names == std::set<std::string>{kViewPageFile, kViewModelFile, kViewPlayerFile});
     // The GLB goes in byte for byte, the bundle as given; the page loads them with classic scripts only.
     const std::string model = test::slurp(page + "/" + kViewModelFile);
-    CHECK(model.find(viewPageBase64(test::slurp(baked))) != std::string::npos);
+    CHECK(model.find(base64Encode(test::slurp(baked))) != std::string::npos);
     CHECK(test::slurp(page + "/" + kViewPlayerFile) == test::slurp(player));
     const std::string html = test::slurp(page + "/" + kViewPageFile);
     CHECK(html.find("type=\"module\"") == std::string::npos);
