@@ -203,6 +203,10 @@ int run(const BakeCommandOptions& options) {
               << " hits, " << (options.springs_only ? "not baked" : "baked into every clip")
               << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
   }
+  if (file.vrm_constrained_muscles > 0) {
+    std::cerr << "VRM 1.0: the base and tip joints of " << file.vrm_constrained_muscles
+              << " muscles carry VRMC_node_constraint aim constraints (docs/extensions.md)\n";
+  }
   return 0;
 }
 
@@ -257,7 +261,8 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->capture_default_str();
   command->add_flag("--helper-joints", options->helper_joints,
                     "Also write each muscle's base, tip and driver joints (the talk's aim and point constraints) as nodes, "
-                    "sampled when the motion is sampled");
+                    "sampled when the motion is sampled; in a VRM 1.0 the base and tip also carry their aim constraints "
+                    "as VRMC_node_constraint");
   command->add_option("--muscles-out", options->muscles_output,
                       "Write the muscles as baked (fitted response curves included) as muscle JSON, to edit or retarget");
   command->add_option("--regions", options->regions,

@@ -10,6 +10,7 @@
 #include "formats/gltf_buffer.h"
 #include "formats/gltf_write.h"
 #include "formats/muscle_rig_extension.h"
+#include "formats/vrm_node_constraint.h"
 #include "formats/vrm_spring.h"
 #include "pipeline/muscle_joint.h"
 
@@ -111,9 +112,9 @@ void writeJiggles(const BakedClip& clip, const Skeleton& skeleton, int input, Gl
   animation->extras = tinygltf::Value(extras);
 }
 
-}  // namespace
-
-tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const BakeResult& bake) {
+// bakedModel(), and the node of each of bake.joints in it (-1 for a joint not written).
+tinygltf::Model bakedModelAndNodes(const GltfDocument& document, const Character& character, const BakeResult& bake,
+                                   std::vector<int>* nodes_of_joints) {
   tinygltf::Model model = modelOf(document);
   const Skeleton& skeleton = character.skeleton;
   GltfBufferAppender data(&model);
@@ -260,10 +261,9 @@ tinygltf::Model bakedModel(const GltfDocument& document, const Character& charac
     }
     addMuscleRigExtension(&model, skeleton, bake.muscles, buildMuscleRig(bake.muscles, skeleton), nodes, jiggles);
   }
+  *nodes_of_joints = node_of_joint;
   return model;
 }
-
-namespace {
 
 long long animationBytes(const tinygltf::Model& model) {
   std::set<int> views;
@@ -289,7 +289,51 @@ int nodeNamed(const tinygltf::Model& model, const std::string& name) {
   return -1;
 }
 
+// The helper joints' aim constraints as VRMC_node_constraint (VRM 1.0 only): each base aims its X at
+// its tip, as the rig aims it (docs/muscle-model.md). The tip's X aims at the base's position, but the
+// tip cannot name the base as its source: the base's constraint already depends on the tip, and the
+// specification forbids circular dependencies between constraints (a runtime that orders them by
+// dependency stops on one). Its source is a plain node at the base's position instead, a child of the
+// origin joint like the base, where the base stays at every pose (the rig moves the origin locator
+// rigidly with that joint). Returns the number of muscles whose joints got constraints.
+int addHelperAimConstraints(tinygltf::Model* model, const Character& character, const BakeResult& bake,
+                            const std::vector<int>& node_of_joint) {
+  if (!bake.helper_joints || model->extensions.count("VRMC_vrm") == 0) return 0;
+  std::vector<VrmAimConstraint> constraints;
+  int muscles = 0;
+  for (size_t m = 0; m < bake.muscles.parts.size(); ++m) {
+    int base_joint = -1, tip_joint = -1;
+    for (size_t k = 0; k < bake.joints.size(); ++k) {
+      if (bake.joints[k].muscle != static_cast<int>(m)) continue;
+      if (bake.joints[k].role == MuscleJointRole::kBase) base_joint = static_cast<int>(k);
+      if (bake.joints[k].role == MuscleJointRole::kTip) tip_joint = static_cast<int>(k);
+    }
+    if (base_joint < 0 || tip_joint < 0) continue;
+    const BakedJoint* base = &bake.joints[base_joint];
+    const BakedJoint* tip = &bake.joints[tip_joint];
+    const int base_node = node_of_joint[base_joint];
+    const int tip_node = node_of_joint[tip_joint];
+    if (base_node < 0 || tip_node < 0) fail("GLTF_PARSE_FAILED", "/nodes", "the baked model lacks " + base->name + " or " + tip->name);
+    tinygltf::Node target;
+    target.name = tip->name + "Target";
+    target.translation = vec(base->rest_local.translation);
+    const int target_node = static_cast<int>(model->nodes.size());
+    model->nodes.push_back(target);
+    model->nodes[character.skeleton.nodes[base->parent]].children.push_back(target_node);
+    constraints.push_back({base_node, tip_node, "PositiveX", 1.0});
+    constraints.push_back({tip_node, target_node, "PositiveX", 1.0});
+    ++muscles;
+  }
+  addVrmAimConstraints(model, constraints);
+  return muscles;
+}
+
 }  // namespace
+
+tinygltf::Model bakedModel(const GltfDocument& document, const Character& character, const BakeResult& bake) {
+  std::vector<int> node_of_joint;
+  return bakedModelAndNodes(document, character, bake, &node_of_joint);
+}
 
 bool isVrmDocument(const GltfDocument& document) {
   const tinygltf::Model& model = modelOf(document);
@@ -298,7 +342,8 @@ bool isVrmDocument(const GltfDocument& document) {
 
 BakedFile writeBakedFile(const GltfDocument& document, const Character& character, const BakeResult& bake,
                          bool binary, const std::vector<JiggleSetup>& springs) {
-  tinygltf::Model model = bakedModel(document, character, bake);
+  std::vector<int> node_of_joint;
+  tinygltf::Model model = bakedModelAndNodes(document, character, bake, &node_of_joint);
   BakedFile file;
   file.vrm = isVrmDocument(document);
   file.input_animation_bytes = animationBytes(modelOf(document));
@@ -311,6 +356,7 @@ BakedFile writeBakedFile(const GltfDocument& document, const Character& characte
     }
     addVrmSpringBones(&model, vrm_springs);
   }
+  file.vrm_constrained_muscles = addHelperAimConstraints(&model, character, bake, node_of_joint);
   file.animation_bytes = animationBytes(model);
   file.bytes = serializeGltf(model, binary);
   return file;

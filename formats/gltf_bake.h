@@ -25,12 +25,14 @@ struct BakedFile {
   long long animation_bytes = 0;        // buffer bytes of every animation sampler's input and output
   long long input_animation_bytes = 0;  // the same in the input document
   bool vrm = false;
+  int vrm_constrained_muscles = 0;      // muscles whose base and tip carry VRMC_node_constraint (VRM 1.0)
 };
 
 bool isVrmDocument(const GltfDocument& document);
 
 // bakedModel(), plus `springs` as VRM spring bones when the document is a VRM (VRM runtimes simulate
-// them live; docs/jiggle.md), serialized as GLB (binary) or glTF JSON.
+// them live; docs/jiggle.md) and, for VRM 1.0 with helper joints, the base and tip aim constraints as
+// VRMC_node_constraint (docs/extensions.md), serialized as GLB (binary) or glTF JSON.
 BakedFile writeBakedFile(const GltfDocument& document, const Character& character, const BakeResult& bake,
                          bool binary, const std::vector<JiggleSetup>& springs);
 
