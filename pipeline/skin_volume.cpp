@@ -117,12 +117,8 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
   return volume;
 }
 
-void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
-                       std::vector<Eigen::Vector3d>* gradient) {
-  if (patch.triangles.empty()) return;
-  // For a closed surface dV/da = (b x c) / 6 summed over the triangles (a, b, c) around a; the origin
-  // drops out, so positions relative to any point give the same gradient.
-  const Eigen::Vector3d origin = welded[patch.triangles[0][0]];
+void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded,
+                            const Eigen::Vector3d& origin, double factor, std::vector<Eigen::Vector3d>* gradient) {
   std::vector<Eigen::Vector3d>& g = *gradient;
   for (const auto& t : patch.triangles) {
     const Eigen::Vector3d a = welded[t[0]] - origin, b = welded[t[1]] - origin, c = welded[t[2]] - origin;
@@ -143,6 +139,14 @@ void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector
     }
     for (int w : hole) g[w] += centre_gradient / static_cast<double>(hole.size());
   }
+}
+
+void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
+                       std::vector<Eigen::Vector3d>* gradient) {
+  if (patch.triangles.empty()) return;
+  // For a closed surface dV/da = (b x c) / 6 summed over the triangles (a, b, c) around a; the origin
+  // drops out, so positions relative to any point give the same gradient.
+  addVolumeGradientAbout(patch, welded, welded[patch.triangles[0][0]], factor, gradient);
 }
 
 std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded) {

@@ -49,6 +49,13 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
 void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
                        std::vector<Eigen::Vector3d>* gradient);
 
+// Its terms for a piece of a patch about a given point: addVolumeGradient() is this about the first
+// vertex. Each vertex's gradient adds its triangles' terms in triangle order, then its holes', so a
+// piece that keeps every triangle and hole around some vertices, in order, gives those vertices the
+// whole patch's gradient to the bit.
+void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded,
+                            const Eigen::Vector3d& origin, double factor, std::vector<Eigen::Vector3d>* gradient);
+
 // Surface area of the patch, caps included.
 double patchArea(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
 
