@@ -68,33 +68,40 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
   }
   const size_t region_count = kept.size();
 
-  auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame) {
+  // The posed vertices of the three skinnings, kept from frame to frame by each chunk of frames.
+  struct Scratch {
+    std::vector<Eigen::Vector3d> posed[3];
+  };
+  auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame, Scratch* scratch) {
     FrameVolumes out;
     out.regions.assign(region_count, {0, 0, 0});
     DualQuaternionFrame dual_quaternions;  // of the skeleton's joints, split once per frame
+    if (frame != nullptr && !prepared.empty()) {
+      const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
+      dual_quaternions = dualQuaternionFrame(skeleton_frame);
+    }
+    std::vector<Eigen::Vector3d>* posed = scratch->posed;
+    const std::array<const std::vector<Eigen::Vector3d>*, 3> skinnings = {&posed[0], &posed[1], &posed[2]};
     for (const PreparedPart& part : prepared) {
-      std::vector<Eigen::Vector3d> posed[3];
       if (frame == nullptr) {
-        posed[0] = posed[1] = posed[2] = weldedPositions(part.surface, part.mesh->positions);
+        posed[0] = weldedPositions(part.surface, part.mesh->positions);
+        posed[1] = posed[2] = posed[0];
       } else {
-        if (dual_quaternions.real.empty()) {
-          const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
-          dual_quaternions = dualQuaternionFrame(skeleton_frame);
-        }
-        const std::vector<int>& welded = part.surface.vertex_of_weld;
-        skinLinearBlend(part.mesh->positions, part.weights->input, *frame, welded, &posed[0]);
-        skinDualQuaternion(part.mesh->positions, part.weights->input, dual_quaternions, welded, &posed[1]);
-        skinLinearBlend(part.mesh->positions, part.weights->rig, *frame, welded, &posed[2]);
+        skinInputAndRig(part.mesh->positions, part.weights->input, part.weights->rig, *frame, dual_quaternions,
+                        part.surface.vertex_of_weld, &posed[0], &posed[1], &posed[2]);
       }
-      for (int k = 0; k < 3; ++k) {
-        out.body[k] += enclosedVolume(part.surface.whole, posed[k]);
-        for (size_t r = 0; r < region_count; ++r) out.regions[r][k] += enclosedVolume(part.regions[r], posed[k]);
+      const std::array<double, 3> body = enclosedVolumes(part.surface.whole, skinnings);
+      for (int k = 0; k < 3; ++k) out.body[k] += body[k];
+      for (size_t r = 0; r < region_count; ++r) {
+        const std::array<double, 3> region = enclosedVolumes(part.regions[r], skinnings);
+        for (int k = 0; k < 3; ++k) out.regions[r][k] += region[k];
       }
     }
     return out;
   };
 
-  const FrameVolumes bind = volumesOf(nullptr);
+  Scratch bind_scratch;
+  const FrameVolumes bind = volumesOf(nullptr, &bind_scratch);
   quality.body_volume = bind.body[0];
   for (size_t r = 0; r < region_count; ++r) quality.region_volumes.push_back(bind.regions[r][0]);
   auto change = [](double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; };
@@ -107,15 +114,29 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
   };
   std::vector<Sample> most_compressed(muscle_count), most_stretched(muscle_count);
 
+  // Every frame's volumes at once, all clips' frames in one loop (chunks of a few frames reuse their
+  // posed vertices), then each clip's extremes in frame order, as one thread would find them.
+  std::vector<std::pair<size_t, size_t>> clip_frame;  // (clip, frame) in clip order
+  std::vector<size_t> first_frame;
+  for (size_t c = 0; c < clips.size(); ++c) {
+    first_frame.push_back(clip_frame.size());
+    for (size_t t = 0; t < clips[c].times.size(); ++t) clip_frame.emplace_back(c, t);
+  }
+  std::vector<FrameVolumes> all_volumes(clip_frame.size());
+  constexpr size_t kFramesPerChunk = 4;
+  parallelFor(threads, clip_frame.size(), kFramesPerChunk, [&](size_t, size_t begin, size_t end) {
+    Scratch scratch;
+    for (size_t i = begin; i < end; ++i)
+      all_volumes[i] = volumesOf(&(*clips[clip_frame[i].first].frames)[clip_frame[i].second], &scratch);
+  });
+
   for (size_t c = 0; c < clips.size(); ++c) {
     const MeasuredClip& clip = clips[c];
     ClipQuality figures;
     figures.clip = clip.name;
     figures.regions.resize(region_count);
     double worst = -1.0;
-    // Every frame's volumes at once, then the extremes in frame order, as one thread would find them.
-    std::vector<FrameVolumes> clip_volumes(clip.times.size());
-    parallelForEach(threads, clip.times.size(), [&](size_t t) { clip_volumes[t] = volumesOf(&(*clip.frames)[t]); });
+    const FrameVolumes* clip_volumes = all_volumes.data() + first_frame[c];
     for (size_t t = 0; t < clip.times.size(); ++t) {
       const FrameVolumes& volumes = clip_volumes[t];
       const double time = clip.times[t];

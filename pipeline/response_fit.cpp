@@ -62,6 +62,38 @@ struct MuscleVertex {
   Eigen::Vector3d q;    // the vertex in the skinned joint's bind frame
 };
 
+// A patch's triangles and holes with a fitted muscle's vertex, in the patch's order: each of those
+// vertices gets the whole patch's gradient from them to the bit (addVolumeGradientAbout(), about the
+// patch's first vertex as addVolumeGradient() sums).
+struct GradientPiece {
+  bool empty = true;  // the patch has no triangles: no gradient
+  ClosedPatch piece;  // welded indices
+  int origin = -1;    // the patch's first vertex
+  std::vector<int> touched;  // the welded vertices of the piece, ascending
+};
+
+GradientPiece gradientPiece(const ClosedPatch& patch, const std::vector<char>& fitted) {
+  GradientPiece out;
+  if (patch.triangles.empty()) return out;
+  out.empty = false;
+  out.origin = patch.triangles[0][0];
+  std::vector<int> touched;
+  for (const auto& t : patch.triangles) {
+    if (!fitted[t[0]] && !fitted[t[1]] && !fitted[t[2]]) continue;
+    out.piece.triangles.push_back(t);
+    touched.insert(touched.end(), t.begin(), t.end());
+  }
+  for (const std::vector<int>& hole : patch.holes) {
+    if (std::none_of(hole.begin(), hole.end(), [&](int w) { return fitted[w] != 0; })) continue;
+    out.piece.holes.push_back(hole);
+    touched.insert(touched.end(), hole.begin(), hole.end());
+  }
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  out.touched = std::move(touched);
+  return out;
+}
+
 struct FitPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
@@ -69,6 +101,9 @@ struct FitPart {
   std::vector<ClosedPatch> regions;
   std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per welded vertex
   std::vector<int> muscle_welded;  // the welded vertices with muscle vertices, ascending
+  // The gradient is only read at muscle_welded: per patch (the whole, then each region), the
+  // triangles and holes around those vertices, in order, and the vertices they touch.
+  std::vector<GradientPiece> gradient_pieces;
 };
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
@@ -180,6 +215,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       }
       if (!part.muscle_vertices[w].empty()) part.muscle_welded.push_back(w);
     }
+    std::vector<char> fitted(part.surface.weldedCount(), 0);
+    for (int w : part.muscle_welded) fitted[w] = 1;
+    part.gradient_pieces.push_back(gradientPiece(part.surface.whole, fitted));
+    for (const ClosedPatch& region : part.regions) part.gradient_pieces.push_back(gradientPiece(region, fitted));
     fit_parts.push_back(std::move(part));
   }
   const double bind_body = measured.body_volume;
@@ -234,7 +273,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       double body_square = 0.0;
     };
     std::vector<PoseRows> pose_rows(poses.size());
-    parallelForEach(threads, poses.size(), [&](size_t i) {
+    // A few poses per chunk, which keeps its posed vertices and gradients from pose to pose.
+    constexpr size_t kPosesPerChunk = 4;
+    parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
+    std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size());
+    std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size());
+    for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].surface.weldedCount(), Eigen::Vector3d::Zero());
+    for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
       std::vector<Eigen::Affine3d> frame(joint_count + muscle_count);
@@ -246,7 +291,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       std::vector<Eigen::Matrix3d> axes(muscle_count);
       for (int m = 0; m < muscle_count; ++m) axes[m] = frame[muscleCarrierJoint(muscles->parts[m])].linear() * bind_axes[m];
 
-      std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size());
       double body = 0.0;
       std::vector<double> region_volume(region_count, 0.0);
       for (size_t p = 0; p < fit_parts.size(); ++p) {
@@ -273,15 +317,17 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const double target = change < lower ? lower : upper;
         active.push_back({r, options.region_weight / std::abs(bind_region[r]), change - target});
       }
-      std::vector<Eigen::Vector3d> gradient;
       for (const Row& row : active) {
         out.rhs.push_back(-row.weight * std::abs(row.region < 0 ? bind_body : bind_region[row.region]) * row.residual);
         if (measure_only) continue;
         Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
         for (size_t p = 0; p < fit_parts.size(); ++p) {
           const FitPart& part = fit_parts[p];
-          gradient.assign(part.surface.weldedCount(), Eigen::Vector3d::Zero());
-          addVolumeGradient(row.region < 0 ? part.surface.whole : part.regions[row.region], posed[p], 1.0, &gradient);
+          // The gradient of the row's patch at the fitted muscles' vertices, from the triangles around
+          // them only; the entries it touches are zeroed again for the next row.
+          std::vector<Eigen::Vector3d>& gradient = gradients[p];
+          const GradientPiece& piece = part.gradient_pieces[static_cast<size_t>(row.region + 1)];
+          if (!piece.empty) addVolumeGradientAbout(piece.piece, posed[p], posed[p][piece.origin], 1.0, &gradient);
           for (int w : part.muscle_welded) {
             if (gradient[w].isZero()) continue;
             for (const MuscleVertex& mv : part.muscle_vertices[w]) {
@@ -299,9 +345,11 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
               }
             }
           }
+          for (int w : piece.touched) gradient[w].setZero();
         }
         out.rows.push_back(row.weight * jacobian);
       }
+    }
     });
     std::vector<Eigen::VectorXd> rows;
     std::vector<double> rhs;

@@ -117,12 +117,31 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
   return volume;
 }
 
-void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
-                       std::vector<Eigen::Vector3d>* gradient) {
-  if (patch.triangles.empty()) return;
-  // For a closed surface dV/da = (b x c) / 6 summed over the triangles (a, b, c) around a; the origin
-  // drops out, so positions relative to any point give the same gradient.
-  const Eigen::Vector3d origin = welded[patch.triangles[0][0]];
+std::array<double, 3> enclosedVolumes(const ClosedPatch& patch, const std::array<const std::vector<Eigen::Vector3d>*, 3>& welded) {
+  std::array<double, 3> volumes = {0.0, 0.0, 0.0};
+  if (patch.triangles.empty()) return volumes;
+  const std::vector<Eigen::Vector3d>&w0 = *welded[0], &w1 = *welded[1], &w2 = *welded[2];
+  const int first = patch.triangles[0][0];
+  const Eigen::Vector3d o0 = w0[first], o1 = w1[first], o2 = w2[first];
+  for (const auto& t : patch.triangles) {
+    volumes[0] += tetraVolume(w0[t[0]] - o0, w0[t[1]] - o0, w0[t[2]] - o0);
+    volumes[1] += tetraVolume(w1[t[0]] - o1, w1[t[1]] - o1, w1[t[2]] - o1);
+    volumes[2] += tetraVolume(w2[t[0]] - o2, w2[t[1]] - o2, w2[t[2]] - o2);
+  }
+  for (const std::vector<int>& hole : patch.holes) {
+    const Eigen::Vector3d c0 = holeCentre(hole, w0) - o0, c1 = holeCentre(hole, w1) - o1, c2 = holeCentre(hole, w2) - o2;
+    for (size_t k = 0; k < hole.size(); ++k) {
+      const int a = hole[k], b = hole[(k + 1) % hole.size()];
+      volumes[0] += tetraVolume(w0[a] - o0, w0[b] - o0, c0);
+      volumes[1] += tetraVolume(w1[a] - o1, w1[b] - o1, c1);
+      volumes[2] += tetraVolume(w2[a] - o2, w2[b] - o2, c2);
+    }
+  }
+  return volumes;
+}
+
+void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded,
+                            const Eigen::Vector3d& origin, double factor, std::vector<Eigen::Vector3d>* gradient) {
   std::vector<Eigen::Vector3d>& g = *gradient;
   for (const auto& t : patch.triangles) {
     const Eigen::Vector3d a = welded[t[0]] - origin, b = welded[t[1]] - origin, c = welded[t[2]] - origin;
@@ -143,6 +162,14 @@ void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector
     }
     for (int w : hole) g[w] += centre_gradient / static_cast<double>(hole.size());
   }
+}
+
+void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
+                       std::vector<Eigen::Vector3d>* gradient) {
+  if (patch.triangles.empty()) return;
+  // For a closed surface dV/da = (b x c) / 6 summed over the triangles (a, b, c) around a; the origin
+  // drops out, so positions relative to any point give the same gradient.
+  addVolumeGradientAbout(patch, welded, welded[patch.triangles[0][0]], factor, gradient);
 }
 
 std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded) {

@@ -44,10 +44,21 @@ std::vector<Eigen::Vector3d> weldedPositions(const VolumeSurface& surface, const
 // counter-clockwise (outward-facing) triangles.
 double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
 
+// enclosedVolume() of one patch under three posings of its vertices, in one pass over its triangles:
+// each the same sum, to the bit.
+std::array<double, 3> enclosedVolumes(const ClosedPatch& patch, const std::array<const std::vector<Eigen::Vector3d>*, 3>& welded);
+
 // dV/dp for every welded vertex: the gradient of enclosedVolume(), for fitting. A cap's centre moves
 // with its loop, so each loop vertex gets its share of the centre's gradient.
 void addVolumeGradient(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, double factor,
                        std::vector<Eigen::Vector3d>* gradient);
+
+// Its terms for a piece of a patch about a given point: addVolumeGradient() is this about the first
+// vertex. Each vertex's gradient adds its triangles' terms in triangle order, then its holes', so a
+// piece that keeps every triangle and hole around some vertices, in order, gives those vertices the
+// whole patch's gradient to the bit.
+void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded,
+                            const Eigen::Vector3d& origin, double factor, std::vector<Eigen::Vector3d>* gradient);
 
 // Surface area of the patch, caps included.
 double patchArea(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);

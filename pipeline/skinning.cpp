@@ -13,19 +13,24 @@ namespace rigbake {
 
 namespace {
 
+using Column = Eigen::Map<const Eigen::Array4d>;
+
+// M p for the column-major 4x4 `a`, x, y and z side by side in one Array4d (the fourth lane is unused).
+inline Eigen::Array4d movedPoint(const double* a, const Eigen::Vector3d& p) {
+  return Column(a) * p.x() + Column(a + 4) * p.y() + Column(a + 8) * p.z() + Column(a + 12);
+}
+
 // p + sum_k w_k (M_k p - p) for one vertex, with exactly the roundings of transformPoint() and of Eigen's
 // coefficient-wise sums, but x, y and z side by side in one Array4d (the fourth lane is unused), so
 // the compiler uses packed instructions: faster, and the same bits as three scalar lanes.
 inline Eigen::Vector3d blendVertex(const Eigen::Vector3d& p, const double* weights, const int* joints, int slots,
                                    const std::vector<Eigen::Affine3d>& frame) {
-  using Column = Eigen::Map<const Eigen::Array4d>;
   const Eigen::Array4d point(p.x(), p.y(), p.z(), 0.0);
   Eigen::Array4d offset = Eigen::Array4d::Zero();
   for (int k = 0; k < slots; ++k) {
     const double weight = weights[k];
     if (weight == 0.0) continue;
-    const double* a = frame[joints[k]].data();  // column-major 4x4
-    const Eigen::Array4d moved = Column(a) * p.x() + Column(a + 4) * p.y() + Column(a + 8) * p.z() + Column(a + 12);
+    const Eigen::Array4d moved = movedPoint(frame[joints[k]].data(), p);
     offset += weight * (moved - point);
   }
   return p + offset.head<3>().matrix();
@@ -141,6 +146,61 @@ void skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions, cons
     const size_t v = static_cast<size_t>(vertices[i]);
     (*posed)[i] = dualQuaternionVertex(bind_positions[v], &influences.weights[v * slots],
                                        &influences.joints[v * slots], static_cast<int>(slots), frame);
+  }
+}
+
+void skinInputAndRig(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& input,
+                     const InfluenceSet& rig, const std::vector<Eigen::Affine3d>& frame,
+                     const DualQuaternionFrame& dual_quaternions, const std::vector<int>& vertices,
+                     std::vector<Eigen::Vector3d>* input_linear, std::vector<Eigen::Vector3d>* input_dual_quaternion,
+                     std::vector<Eigen::Vector3d>* rig_linear) {
+  assert(input.vertexCount() == static_cast<int>(bind_positions.size()));
+  assert(rig.vertexCount() == static_cast<int>(bind_positions.size()));
+  const size_t input_slots = static_cast<size_t>(input.slots_per_vertex), rig_slots = static_cast<size_t>(rig.slots_per_vertex);
+  input_linear->resize(vertices.size());
+  input_dual_quaternion->resize(vertices.size());
+  rig_linear->resize(vertices.size());
+  // The input's joints' M p at the vertex, for the rig's blend: the same expression, so the same bits.
+  constexpr int kCached = 16;
+  int cached_joint[kCached];
+  Eigen::Array4d cached_moved[kCached];
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const size_t v = static_cast<size_t>(vertices[i]);
+    const Eigen::Vector3d& p = bind_positions[v];
+    const Eigen::Array4d point(p.x(), p.y(), p.z(), 0.0);
+    const double* weights = &input.weights[v * input_slots];
+    const int* joints = &input.joints[v * input_slots];
+    int cached = 0;
+    Eigen::Array4d offset = Eigen::Array4d::Zero();
+    for (size_t k = 0; k < input_slots; ++k) {
+      const double weight = weights[k];
+      if (weight == 0.0) continue;
+      const Eigen::Array4d moved = movedPoint(frame[joints[k]].data(), p);
+      offset += weight * (moved - point);
+      if (cached < kCached) {
+        cached_joint[cached] = joints[k];
+        cached_moved[cached] = moved;
+        ++cached;
+      }
+    }
+    (*input_linear)[i] = p + offset.head<3>().matrix();
+    (*input_dual_quaternion)[i] = dualQuaternionVertex(p, weights, joints, static_cast<int>(input_slots), dual_quaternions);
+    weights = &rig.weights[v * rig_slots];
+    joints = &rig.joints[v * rig_slots];
+    offset = Eigen::Array4d::Zero();
+    for (size_t k = 0; k < rig_slots; ++k) {
+      const double weight = weights[k];
+      if (weight == 0.0) continue;
+      int c = 0;
+      while (c < cached && cached_joint[c] != joints[k]) ++c;
+      if (c < cached) {
+        offset += weight * (cached_moved[c] - point);
+      } else {
+        const Eigen::Array4d moved = movedPoint(frame[joints[k]].data(), p);
+        offset += weight * (moved - point);
+      }
+    }
+    (*rig_linear)[i] = p + offset.head<3>().matrix();
   }
 }
 

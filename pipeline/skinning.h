@@ -45,4 +45,15 @@ void skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions, cons
                         const DualQuaternionFrame& frame, const std::vector<int>& vertices,
                         std::vector<Eigen::Vector3d>* posed);
 
+// The three skinnings the deformation-quality figures compare, of the listed vertices in one pass:
+// linear blend and dual quaternions of `input` and linear blend of `rig` (joints of the skeleton and
+// beyond, in `frame`; `dual_quaternions` splits the skeleton's joints). The same bits as
+// skinLinearBlend() and skinDualQuaternion() each; a joint both weight sets use at a vertex is
+// transformed once.
+void skinInputAndRig(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& input,
+                     const InfluenceSet& rig, const std::vector<Eigen::Affine3d>& frame,
+                     const DualQuaternionFrame& dual_quaternions, const std::vector<int>& vertices,
+                     std::vector<Eigen::Vector3d>* input_linear, std::vector<Eigen::Vector3d>* input_dual_quaternion,
+                     std::vector<Eigen::Vector3d>* rig_linear);
+
 }  // namespace rigbake
