@@ -24,6 +24,8 @@
 #include <cmath>
 #include <limits>
 
+#include "runtime/affine.h"
+
 namespace rigbake::runtime {
 namespace jiggle_detail {
 
@@ -223,17 +225,6 @@ Rigid<Real> rigidOf(const Real* m, V3<Real>* scale) {
 template <typename Real>
 Q4<Real> rotationOrIdentity(const Real* m) {
   return m ? rigidOf(m, static_cast<V3<Real>*>(nullptr)).rotation : Q4<Real>{0, 0, 0, 1};
-}
-
-// out = a * b for column-major affine 4x4 matrices.
-template <typename Real>
-void multiplyAffine4(const Real* a, const Real* b, Real* out) {
-  for (int c = 0; c < 4; ++c) {
-    for (int r = 0; r < 3; ++r) {
-      out[c * 4 + r] = a[r] * b[c * 4] + a[4 + r] * b[c * 4 + 1] + a[8 + r] * b[c * 4 + 2] + (c == 3 ? a[12 + r] : Real(0));
-    }
-    out[c * 4 + 3] = c == 3 ? Real(1) : Real(0);
-  }
 }
 
 // The inverse of an affine 4x4 matrix; false (out untouched) when its linear part is singular.
@@ -805,7 +796,7 @@ bool JiggleJob<Real>::Run() const {
     Real local[16];
     Real inverse[16];
     if (parent && invertAffine4(parent, inverse)) {
-      multiplyAffine4(inverse, joint, local);
+      detail::multiplyAffine(inverse, joint, local);
     } else {
       for (int k = 0; k < 16; ++k) local[k] = joint[k];
     }
@@ -829,7 +820,7 @@ bool JiggleJob<Real>::Run() const {
       store3(local_rigid.translation, jiggled_local + 12);
       jiggled_local[15] = Real(1);
       if (parent) {
-        multiplyAffine4(parent, jiggled_local, model);
+        detail::multiplyAffine(parent, jiggled_local, model);
       } else {
         for (int k = 0; k < 16; ++k) model[k] = jiggled_local[k];
       }

@@ -18,6 +18,8 @@
 #include <cmath>
 #include <utility>
 
+#include "runtime/affine.h"
+
 namespace rigbake::runtime {
 namespace {
 
@@ -57,17 +59,6 @@ template <typename Real>
 Vec3<Real> transformDirection(const Real* m, Vec3<Real> d) {
   return {m[0] * d.x + m[4] * d.y + m[8] * d.z, m[1] * d.x + m[5] * d.y + m[9] * d.z,
           m[2] * d.x + m[6] * d.y + m[10] * d.z};
-}
-
-// out = a * b for column-major 4x4 affine matrices (the last row of both is 0 0 0 1).
-template <typename Real>
-void multiplyAffine(const Real* a, const Real* b, Real* out) {
-  for (int c = 0; c < 4; ++c) {
-    for (int r = 0; r < 3; ++r) {
-      out[c * 4 + r] = a[r] * b[c * 4] + a[4 + r] * b[c * 4 + 1] + a[8 + r] * b[c * 4 + 2] + (c == 3 ? a[12 + r] : Real(0));
-    }
-    out[c * 4 + 3] = c == 3 ? Real(1) : Real(0);
-  }
 }
 
 template <typename Real>
@@ -265,7 +256,7 @@ bool MuscleRigJob<Real>::Run() const {
       local[4 + r] *= response.scale;
       local[8 + r] *= response.scale;
     }
-    multiplyAffine(joints + 16 * muscle.carrier_joint, local, skinned_matrices.data + 16 * m);
+    detail::multiplyAffine(joints + 16 * muscle.carrier_joint, local, skinned_matrices.data + 16 * m);
   }
   return true;
 }
