@@ -62,49 +62,86 @@ struct MuscleVertex {
   Eigen::Vector3d q;    // the vertex in the skinned joint's bind frame
 };
 
-// A patch's triangles and holes with a fitted muscle's vertex, in the patch's order: each of those
-// vertices gets the whole patch's gradient from them to the bit (addVolumeGradientAbout(), about the
-// patch's first vertex as addVolumeGradient() sums).
-struct GradientPiece {
-  bool empty = true;  // the patch has no triangles: no gradient
-  ClosedPatch piece;  // welded indices
-  int origin = -1;    // the patch's first vertex
-  std::vector<int> touched;  // the welded vertices of the piece, ascending
+// A patch (the whole surface or a region) split by what the fit can move: the triangles and holes
+// with a fitted muscle's vertex (`moving`, over the part's moving vertices) and the rest (`fixed`, over
+// welded vertices). The fixed piece's volume depends on the pose alone, so it is summed once per pose;
+// each iteration re-skins and re-sums only the moving piece, about the same point, and the moving
+// piece is also all the volume gradient at the fitted vertices needs.
+struct SplitPatch {
+  int first_vertex = -1;     // welded; -1: the patch has no triangles (no volume, no gradient)
+  ClosedPatch fixed;         // welded indices
+  ClosedPatch moving;        // moving-vertex indices (FitPart::moving_vertices)
+  std::vector<int> touched;  // the moving vertices of `moving`, ascending: zeroed after each gradient
+  std::vector<int> fitted;   // the fitted vertices among them, ascending
 };
 
-GradientPiece gradientPiece(const ClosedPatch& patch, const std::vector<char>& fitted) {
-  GradientPiece out;
+SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted) {
+  SplitPatch out;
   if (patch.triangles.empty()) return out;
-  out.empty = false;
-  out.origin = patch.triangles[0][0];
-  std::vector<int> touched;
+  out.first_vertex = patch.triangles[0][0];
   for (const auto& t : patch.triangles) {
-    if (!fitted[t[0]] && !fitted[t[1]] && !fitted[t[2]]) continue;
-    out.piece.triangles.push_back(t);
-    touched.insert(touched.end(), t.begin(), t.end());
+    const bool moves = fitted[t[0]] || fitted[t[1]] || fitted[t[2]];
+    (moves ? out.moving : out.fixed).triangles.push_back(t);
   }
   for (const std::vector<int>& hole : patch.holes) {
-    if (std::none_of(hole.begin(), hole.end(), [&](int w) { return fitted[w] != 0; })) continue;
-    out.piece.holes.push_back(hole);
-    touched.insert(touched.end(), hole.begin(), hole.end());
+    const bool moves = std::any_of(hole.begin(), hole.end(), [&](int w) { return fitted[w] != 0; });
+    (moves ? out.moving : out.fixed).holes.push_back(hole);
+  }
+  return out;
+}
+
+// Renumbers a moving piece's welded indices to moving-vertex indices and lists the ones it touches.
+void renumberMoving(const std::vector<int>& moving_of_weld, SplitPatch* split) {
+  std::vector<int> touched;
+  for (auto& t : split->moving.triangles) {
+    for (int& w : t) {
+      w = moving_of_weld[w];
+      touched.push_back(w);
+    }
+  }
+  for (std::vector<int>& hole : split->moving.holes) {
+    for (int& w : hole) {
+      w = moving_of_weld[w];
+      touched.push_back(w);
+    }
   }
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-  out.touched = std::move(touched);
-  return out;
+  split->touched = std::move(touched);
 }
 
 struct FitPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
-  VolumeSurface surface;
-  std::vector<ClosedPatch> regions;
-  std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per welded vertex
-  std::vector<int> muscle_welded;  // the welded vertices with muscle vertices, ascending
-  // The gradient is only read at muscle_welded: per patch (the whole, then each region), the
-  // triangles and holes around those vertices, in order, and the vertices they touch.
-  std::vector<GradientPiece> gradient_pieces;
+  std::vector<int> welded_vertices;  // welded vertex -> its part vertex, for the pose-only pass
+  std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
+  std::vector<SplitPatch> patches;    // the whole surface, then each region
+  std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
+  std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per moving index
 };
+
+// One muscle's keys at one pose: its posed rest up and side axes and, per key, the coefficients of a
+// vertex's motion along up, side and the scale's direction per unit amplitude (hat weight included).
+struct MuscleKeyMotion {
+  Eigen::Vector3d up_axis = Eigen::Vector3d::Zero(), side_axis = Eigen::Vector3d::Zero();
+  double up[kKeys] = {}, side[kKeys] = {}, scale[kKeys] = {};
+};
+
+// A fixed piece at one pose: the point its volume is summed about and that sum.
+struct FixedVolume {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double volume = 0.0;
+};
+
+// The skinning matrices at a pose: the skeleton's joints, then each muscle's skinned joint.
+std::vector<Eigen::Affine3d> skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
+                                           const std::vector<Eigen::Affine3d>& bind_inverse) {
+  const int joint_count = skeleton.size();
+  std::vector<Eigen::Affine3d> frame(joint_count + bind_inverse.size());
+  for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
+  for (size_t m = 0; m < bind_inverse.size(); ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
+  return frame;
+}
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
 
@@ -201,42 +238,83 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     FitPart part;
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
-    part.surface = std::move(measured.surfaces[p]);
+    VolumeSurface& surface = measured.surfaces[p];
+    part.welded_vertices = surface.vertex_of_weld;
     for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
-    part.muscle_vertices.resize(part.surface.weldedCount());
     const InfluenceSet& rig = parts[p].rig;
-    for (int w = 0; w < part.surface.weldedCount(); ++w) {
-      const int v = part.surface.vertex_of_weld[w];
+    std::vector<std::vector<MuscleVertex>> muscle_of_weld(surface.weldedCount());
+    std::vector<char> fitted(surface.weldedCount(), 0);
+    for (int w = 0; w < surface.weldedCount(); ++w) {
+      const int v = surface.vertex_of_weld[w];
       for (int k = 0; k < rig.slots_per_vertex; ++k) {
         const int m = rig.joints[v * rig.slots_per_vertex + k] - joint_count;
         const double weight = rig.weights[v * rig.slots_per_vertex + k];
         if (m < 0 || m >= muscle_count || kind[m] < 0 || weight <= 0.0) continue;
-        part.muscle_vertices[w].push_back({m, weight, bind_inverse[m] * part.mesh->positions[v]});
+        muscle_of_weld[w].push_back({m, weight, bind_inverse[m] * part.mesh->positions[v]});
       }
-      if (!part.muscle_vertices[w].empty()) part.muscle_welded.push_back(w);
+      fitted[w] = !muscle_of_weld[w].empty();
     }
-    std::vector<char> fitted(part.surface.weldedCount(), 0);
-    for (int w : part.muscle_welded) fitted[w] = 1;
-    part.gradient_pieces.push_back(gradientPiece(part.surface.whole, fitted));
-    for (const ClosedPatch& region : part.regions) part.gradient_pieces.push_back(gradientPiece(region, fitted));
+    part.patches.push_back(splitPatch(surface.whole, fitted));
+    for (const ClosedPatch& region : part.regions) part.patches.push_back(splitPatch(region, fitted));
+    // The moving vertices: every vertex of a moving piece, in welded order.
+    std::vector<char> moving(surface.weldedCount(), 0);
+    for (const SplitPatch& split : part.patches) {
+      for (const auto& t : split.moving.triangles) {
+        for (int w : t) moving[w] = 1;
+      }
+      for (const std::vector<int>& hole : split.moving.holes) {
+        for (int w : hole) moving[w] = 1;
+      }
+    }
+    std::vector<int> moving_of_weld(surface.weldedCount(), -1);
+    for (int w = 0; w < surface.weldedCount(); ++w) {
+      if (!moving[w]) continue;
+      moving_of_weld[w] = static_cast<int>(part.moving_vertices.size());
+      part.moving_vertices.push_back(surface.vertex_of_weld[w]);
+      part.muscle_vertices.push_back(std::move(muscle_of_weld[w]));
+    }
+    for (SplitPatch& split : part.patches) renumberMoving(moving_of_weld, &split);
+    for (SplitPatch& split : part.patches) {
+      for (int c : split.touched) {
+        if (!part.muscle_vertices[c].empty()) split.fitted.push_back(c);
+      }
+    }
     fit_parts.push_back(std::move(part));
   }
   const double bind_body = measured.body_volume;
   std::vector<double> bind_region;
   for (size_t r : kept) bind_region.push_back(measured.region_volumes[r]);
-  // Input-skinning region changes per pose: the dead zones do not depend on the fit.
+  const size_t patch_count = 1 + static_cast<size_t>(region_count);
+
+  // One pass over the poses for what the fit does not change: the input skinning's region changes (the
+  // dead zones) and the fixed pieces' volumes (their vertices carry no fitted muscle, so any response
+  // gives the same positions).
   std::vector<std::vector<double>> input_region_change(poses.size(), std::vector<double>(region_count, 0.0));
-  parallelForEach(threads, poses.size(), [&](size_t i) {
-    std::vector<Eigen::Affine3d> frame(joint_count);
-    for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(poses[i], skeleton, j);
-    std::vector<double> volume(region_count, 0.0);
-    std::vector<Eigen::Vector3d> welded;
-    for (const FitPart& part : fit_parts) {
-      skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.surface.vertex_of_weld, &welded);
-      for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
-    }
-    for (int r = 0; r < region_count; ++r) input_region_change[i][r] = signedChange(volume[r], bind_region[r]);
-  });
+  // [pose][part * patch_count + patch]
+  std::vector<std::vector<FixedVolume>> fixed_volume(poses.size(), std::vector<FixedVolume>(fit_parts.size() * patch_count));
+  {
+    applyTheta(theta);
+    const runtime::MuscleRig<double> start_rig = buildMuscleRig(*muscles, skeleton);
+    parallelForEach(threads, poses.size(), [&](size_t i) {
+      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse);
+      std::vector<double> volume(region_count, 0.0);
+      std::vector<Eigen::Vector3d> welded;
+      for (size_t p = 0; p < fit_parts.size(); ++p) {
+        const FitPart& part = fit_parts[p];
+        skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.welded_vertices, &welded);
+        for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
+        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.welded_vertices, &welded);
+        for (size_t k = 0; k < patch_count; ++k) {
+          const SplitPatch& split = part.patches[k];
+          if (split.first_vertex < 0) continue;
+          FixedVolume& fixed = fixed_volume[i][p * patch_count + k];
+          fixed.origin = welded[split.first_vertex];
+          fixed.volume = enclosedVolumeAbout(split.fixed, welded, fixed.origin);
+        }
+      }
+      for (int r = 0; r < region_count; ++r) input_region_change[i][r] = signedChange(volume[r], bind_region[r]);
+    });
+  }
 
   // How far the poses drive each key (its largest hat weight): the prior bounds the response the poses
   // actually see, so a key the clips barely reach cannot grow without limit, and a key they never
@@ -278,26 +356,44 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
     std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size());
     std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size());
-    for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].surface.weldedCount(), Eigen::Vector3d::Zero());
+    std::vector<MuscleKeyMotion> key_motion(muscle_count);
+    for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
-      std::vector<Eigen::Affine3d> frame(joint_count + muscle_count);
-      for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
-      for (int m = 0; m < muscle_count; ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, m) * bind_inverse[m];
+      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, pose, evaluation, bind_inverse);
       std::vector<std::array<double, kKeys>> key_weight(muscle_count);
       for (int m = 0; m < muscle_count; ++m) keyWeights(muscles->parts[m], evaluation.drivers[m], key_weight[m].data());
       // d p / d (offset up) and d p / d (scale): the skinned joint's rest axes as posed.
       std::vector<Eigen::Matrix3d> axes(muscle_count);
       for (int m = 0; m < muscle_count; ++m) axes[m] = frame[muscleCarrierJoint(muscles->parts[m])].linear() * bind_axes[m];
+      // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
+      // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), u and s the posed rest
+      // up and side axes: so a row's Jacobian needs, per muscle vertex, only g . u and g . s.
+      for (int m = 0; m < muscle_count; ++m) {
+        if (kind[m] < 0) continue;
+        MuscleKeyMotion& motion = key_motion[m];
+        motion.up_axis = axes[m].col(1);
+        motion.side_axis = axes[m].col(2);
+        for (int k = 0; k < kKeys; ++k) {
+          const KeyShape& shape = shapes[m][k];
+          motion.up[k] = key_weight[m][k] * shape.up;
+          motion.side[k] = key_weight[m][k] * shape.side * side_sign[m];
+          motion.scale[k] = key_weight[m][k] * shape.scale;
+        }
+      }
 
       double body = 0.0;
       std::vector<double> region_volume(region_count, 0.0);
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.surface.vertex_of_weld, &posed[p]);
-        body += enclosedVolume(part.surface.whole, posed[p]);
-        for (int r = 0; r < region_count; ++r) region_volume[r] += enclosedVolume(part.regions[r], posed[p]);
+        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.moving_vertices, &posed[p]);
+        for (size_t k = 0; k < patch_count; ++k) {
+          if (part.patches[k].first_vertex < 0) continue;
+          const FixedVolume& fixed = fixed_volume[i][p * patch_count + k];
+          const double volume = fixed.volume + enclosedVolumeAbout(part.patches[k].moving, posed[p], fixed.origin);
+          (k == 0 ? body : region_volume[k - 1]) += volume;
+        }
       }
       const double body_change = signedChange(body, bind_body);
       PoseRows& out = pose_rows[i];
@@ -326,26 +422,22 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           // The gradient of the row's patch at the fitted muscles' vertices, from the triangles around
           // them only; the entries it touches are zeroed again for the next row.
           std::vector<Eigen::Vector3d>& gradient = gradients[p];
-          const GradientPiece& piece = part.gradient_pieces[static_cast<size_t>(row.region + 1)];
-          if (!piece.empty) addVolumeGradientAbout(piece.piece, posed[p], posed[p][piece.origin], 1.0, &gradient);
-          for (int w : part.muscle_welded) {
-            if (gradient[w].isZero()) continue;
+          const size_t k = static_cast<size_t>(row.region + 1);
+          const SplitPatch& split = part.patches[k];
+          if (split.first_vertex < 0) continue;
+          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
+          for (int w : split.fitted) {
             for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-              const Eigen::Matrix3d& muscle_axes = axes[mv.muscle];
-              const double along_up = mv.weight * gradient[w].dot(muscle_axes.col(1));
-              const double along_side = mv.weight * side_sign[mv.muscle] * gradient[w].dot(muscle_axes.col(2));
-              const double along_scale =
-                  mv.weight * gradient[w].dot(muscle_axes.col(1) * mv.q.y() + muscle_axes.col(2) * mv.q.z());
-              const int base = kind[mv.muscle] * kKeys;
-              for (int k = 0; k < kKeys; ++k) {
-                const double phi = key_weight[mv.muscle][k];
-                if (phi == 0.0) continue;
-                const KeyShape& shape = shapes[mv.muscle][k];
-                jacobian[base + k] += phi * (shape.up * along_up + shape.side * along_side + shape.scale * along_scale);
-              }
+              const MuscleKeyMotion& motion = key_motion[mv.muscle];
+              const double along_up = mv.weight * gradient[w].dot(motion.up_axis);
+              const double along_side = mv.weight * gradient[w].dot(motion.side_axis);
+              const double along_scale = mv.q.y() * along_up + mv.q.z() * along_side;
+              double* row_keys = jacobian.data() + kind[mv.muscle] * kKeys;
+              for (int k = 0; k < kKeys; ++k)
+                row_keys[k] += motion.up[k] * along_up + motion.side[k] * along_side + motion.scale[k] * along_scale;
             }
           }
-          for (int w : piece.touched) gradient[w].setZero();
+          for (int w : split.touched) gradient[w].setZero();
         }
         out.rows.push_back(row.weight * jacobian);
       }

@@ -105,7 +105,10 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
   // About the first vertex rather than the scene origin: the same sum for a closed surface, with small
   // terms for a character far from the origin.
   if (patch.triangles.empty()) return 0.0;
-  const Eigen::Vector3d origin = welded[patch.triangles[0][0]];
+  return enclosedVolumeAbout(patch, welded, welded[patch.triangles[0][0]]);
+}
+
+double enclosedVolumeAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, const Eigen::Vector3d& origin) {
   double volume = 0.0;
   for (const auto& t : patch.triangles)
     volume += tetraVolume(welded[t[0]] - origin, welded[t[1]] - origin, welded[t[2]] - origin);

@@ -44,6 +44,11 @@ std::vector<Eigen::Vector3d> weldedPositions(const VolumeSurface& surface, const
 // counter-clockwise (outward-facing) triangles.
 double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
 
+// The same sum about a given point. Split a closed patch's triangles and holes into pieces and the
+// pieces' sums about one point add up to the whole's volume: the response fit keeps the sum of the
+// pieces its unknowns cannot move and re-sums only the rest.
+double enclosedVolumeAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, const Eigen::Vector3d& origin);
+
 // enclosedVolume() of one patch under three posings of its vertices, in one pass over its triangles:
 // each the same sum, to the bit.
 std::array<double, 3> enclosedVolumes(const ClosedPatch& patch, const std::array<const std::vector<Eigen::Vector3d>*, 3>& welded);
