@@ -219,8 +219,18 @@ struct BlockState {
   Real origin[3][kLanes], insertion[3][kLanes], segment[3][kLanes];
   Real length[kLanes], ratio[kLanes], clamped_ratio[kLanes], twist[kLanes];
   Real up[kLanes], side[kLanes], scale[kLanes];  // the response
-  Real skinned[12][kLanes];
 };
+
+// Each lane's carrier matrix from its origin's or its insertion's (MuscleCarriers::kPicked).
+template <typename Real>
+void pickCarriers(const MuscleLanes<Real>& block, BlockState<Real>* s) {
+  for (int e = 0; e < 12; ++e) {
+    RIGBAKE_LANE_LOOP
+    for (int l = 0; l < kLanes; ++l) {
+      s->carrier_joint.m[e][l] = select(block.carrier_is_origin[l] > Real(0), s->origin_joint.m[e][l], s->insertion_joint.m[e][l]);
+    }
+  }
+}
 
 // The locators o = W_o (o_l, 1) and i = W_i (i_l, 1), the length ratio r = |i - o| / L_rest and
 // r_c = clamp(r, compression, stretch).
@@ -288,9 +298,7 @@ void addCurve(const MuscleCurveLanes<Real>& curve, const MuscleSegmentLanes<Real
     const MuscleSegmentLanes<Real>& g = segments[k];
     RIGBAKE_LANE_LOOP
     for (int l = 0; l < kLanes; ++l) {
-      const Real through = (driver[l] - g.from[l]) * g.inverse_span[l];
-      const Real above = through > Real(0) ? through : Real(0);
-      const Real t = above < Real(1) ? above : Real(1);
+      const Real t = std::min(std::max((driver[l] - g.from[l]) * g.inverse_span[l], Real(0)), Real(1));
       up[l] += t * g.up_change[l];
       side[l] += t * g.side_change[l];
       scale[l] += t * g.scale_change[l];
@@ -325,22 +333,23 @@ void evaluateResponses(const MuscleLanes<Real>& block, const MuscleSegmentLanes<
 // K's columns 1 and 2 scaled, its translation moved along them, then the affine product, each entry
 // summed in the order of the matrix product.
 template <typename Real>
-void evaluateSkinned(const MuscleLanes<Real>& block, BlockState<Real>* s) {
+void evaluateSkinned(const MuscleLanes<Real>& block, const JointLanes<Real>& carrier, const BlockState<Real>& s,
+                     Real (*skinned)[kLanes]) {
   RIGBAKE_LANE_LOOP
   for (int l = 0; l < kLanes; ++l) {
     Real k[12];
     for (int e = 0; e < 12; ++e) k[e] = block.skinned_in_carrier[e][l];
-    for (int r = 0; r < 3; ++r) k[9 + r] += k[3 + r] * s->up[l] + k[6 + r] * s->side[l];
+    for (int r = 0; r < 3; ++r) k[9 + r] += k[3 + r] * s.up[l] + k[6 + r] * s.side[l];
     for (int r = 0; r < 3; ++r) {
-      k[3 + r] *= s->scale[l];
-      k[6 + r] *= s->scale[l];
+      k[3 + r] *= s.scale[l];
+      k[6 + r] *= s.scale[l];
     }
     for (int c = 0; c < 4; ++c) {
-      const Vec3<Real> v = s->carrier_joint.direction(l, {k[3 * c], k[3 * c + 1], k[3 * c + 2]});
-      const Vec3<Real> column = c == 3 ? v + s->carrier_joint.column(3, l) : v;
-      s->skinned[3 * c][l] = column.x;
-      s->skinned[3 * c + 1][l] = column.y;
-      s->skinned[3 * c + 2][l] = column.z;
+      const Vec3<Real> v = carrier.direction(l, {k[3 * c], k[3 * c + 1], k[3 * c + 2]});
+      const Vec3<Real> column = c == 3 ? v + carrier.column(3, l) : v;
+      skinned[3 * c][l] = column.x;
+      skinned[3 * c + 1][l] = column.y;
+      skinned[3 * c + 2][l] = column.z;
     }
   }
 }
@@ -457,6 +466,7 @@ void prepareLane(const MuscleRig<Real>& rig, int m, int l, MuscleLanes<Real>* bl
   block->origin_joint[l] = muscle.origin_joint;
   block->insertion_joint[l] = muscle.insertion_joint;
   block->carrier_joint[l] = muscle.carrier_joint;
+  block->carrier_is_origin[l] = muscle.carrier_joint == muscle.origin_joint ? Real(1) : Real(0);
   for (int c = 0; c < 3; ++c) {
     block->origin_local[c][l] = muscle.origin_local[c];
     block->insertion_local[c][l] = muscle.insertion_local[c];
@@ -502,19 +512,30 @@ void prepareMuscleRig(MuscleRig<Real>* rig) {
   // Muscles whose twist moves the response first, so that the blocks after them need no twist.
   std::vector<int> order(rig->muscles.size());
   for (std::size_t m = 0; m < order.size(); ++m) order[m] = static_cast<int>(m);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return twistMoves(*rig, rig->muscles[a]) && !twistMoves(*rig, rig->muscles[b]); });
+  auto group = [&](int m) {
+    const RigMuscle<Real>& muscle = rig->muscles[m];
+    const int carrier = muscle.carrier_joint == muscle.origin_joint ? 0 : (muscle.carrier_joint == muscle.insertion_joint ? 1 : 2);
+    return (twistMoves(*rig, muscle) ? 0 : 3) + carrier;
+  };
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return group(a) < group(b); });
   const int muscles = static_cast<int>(order.size());
   for (int begin = 0; begin < muscles; begin += kLanes) {
     MuscleLanes<Real> block;
     block.count = std::min(kLanes, muscles - begin);
     block.segment_begin = static_cast<int>(rig->segments.size());
+    int origins = 0, insertions = 0;
     for (int l = 0; l < block.count; ++l) {
       const RigMuscle<Real>& m = rig->muscles[order[begin + l]];
       block.ratio_segment_count = std::max(block.ratio_segment_count, m.ratio_key_count - 1);
       block.twist_segment_count = std::max(block.twist_segment_count, m.twist_key_count - 1);
       block.twist_moves = block.twist_moves || twistMoves(*rig, m);
+      origins += m.carrier_joint == m.origin_joint ? 1 : 0;
+      insertions += m.carrier_joint == m.insertion_joint ? 1 : 0;
     }
+    block.carriers = origins == block.count      ? MuscleCarriers::kOrigins
+                     : insertions == block.count ? MuscleCarriers::kInsertions
+                     : origins + insertions == block.count ? MuscleCarriers::kPicked
+                                                            : MuscleCarriers::kRead;
     rig->segments.resize(rig->segments.size() + block.ratio_segment_count + block.twist_segment_count, emptySegment<Real>());
     // Lanes past the last muscle repeat it, so that they compute finite numbers nobody reads.
     for (int l = 0; l < kLanes; ++l) {
@@ -575,11 +596,12 @@ bool MuscleRigJob<Real>::Run() const {
   const bool report = !drivers.empty();
   const bool helpers = !helper_matrices.empty();
   BlockState<Real> s;
-  Real helper_lanes[48][kLanes];
+  Real skinned[12][kLanes], helper_lanes[48][kLanes];
   for (const MuscleLanes<Real>& block : rig->blocks) {
     gatherJoints(joints, block.origin_joint, &s.origin_joint);
     gatherJoints(joints, block.insertion_joint, &s.insertion_joint);
-    gatherJoints(joints, block.carrier_joint, &s.carrier_joint);
+    if (block.carriers == MuscleCarriers::kRead) gatherJoints(joints, block.carrier_joint, &s.carrier_joint);
+    if (block.carriers == MuscleCarriers::kPicked) pickCarriers(block, &s);
     evaluateLocators(block, &s);
     if (report || block.twist_moves) {
       evaluateTwist(block, &s);
@@ -588,11 +610,14 @@ bool MuscleRigJob<Real>::Run() const {
       for (int l = 0; l < kLanes; ++l) s.twist[l] = 0;
     }
     evaluateResponses(block, rig->segments.data(), &s);
-    evaluateSkinned(block, &s);
+    evaluateSkinned(block, block.carriers == MuscleCarriers::kOrigins      ? s.origin_joint
+                           : block.carriers == MuscleCarriers::kInsertions ? s.insertion_joint
+                                                                           : s.carrier_joint,
+                    s, skinned);
     for (int l = 0; l < block.count; ++l) {
       Real* out = skinned_matrices.data + 16 * block.muscle[l];
       for (int c = 0; c < 4; ++c) {
-        for (int r = 0; r < 3; ++r) out[4 * c + r] = s.skinned[3 * c + r][l];
+        for (int r = 0; r < 3; ++r) out[4 * c + r] = skinned[3 * c + r][l];
         out[4 * c + 3] = c == 3 ? Real(1) : Real(0);
       }
     }

@@ -83,7 +83,8 @@ constexpr int kMuscleLanes = 4;
 // The rig as Run() reads it, built by prepareMuscleRig() from the muscles and keys alone, so that Run()
 // need not derive it every frame: kMuscleLanes muscles per block, each quantity an array over the
 // lanes. Lanes past a block's count repeat its last muscle (evaluated, not written). Muscles whose
-// twist moves the response come first, so that the blocks after them skip the twist.
+// twist moves the response come first, so that the blocks after them skip the twist, and within each
+// group those carried by their origin, then by their insertion, then by another joint.
 template <typename Real>
 struct MuscleCurveLanes {  // one response curve (ratio or twist) per lane
   // The first key's values (rest 0, 0, 1 for a curve without keys).
@@ -96,11 +97,21 @@ struct MuscleSegmentLanes {  // the segment from key k to key k + 1 of one curve
   Real from[kMuscleLanes], inverse_span[kMuscleLanes];
   Real up_change[kMuscleLanes], side_change[kMuscleLanes], scale_change[kMuscleLanes];
 };
+enum class MuscleCarriers {
+  kOrigins,     // every lane's carrier is its origin joint
+  kInsertions,  // every lane's carrier is its insertion joint
+  kPicked,      // each lane's is its origin or its insertion joint (carrier_is_origin)
+  kRead,        // some lane's is another joint: the carriers' matrices are read
+};
 template <typename Real>
 struct MuscleLanes {
   int count = 0;             // muscles in this block, 1 to kMuscleLanes
   int muscle[kMuscleLanes];  // each lane's index in MuscleRig::muscles (and in the job's outputs)
   int origin_joint[kMuscleLanes], insertion_joint[kMuscleLanes], carrier_joint[kMuscleLanes];
+  // Most carriers are the origin or the insertion joint, whose matrices a block reads anyway: where
+  // the lane's carrier is the origin joint (1) or not (0), and where the block takes its carriers'.
+  Real carrier_is_origin[kMuscleLanes];
+  MuscleCarriers carriers = MuscleCarriers::kRead;
   Real origin_local[3][kMuscleLanes], insertion_local[3][kMuscleLanes];
   Real rest_length[kMuscleLanes], compression[kMuscleLanes], stretch[kMuscleLanes];
   // The twist driver's reference pair: two unit directions across the rest fibre a, u1 and
