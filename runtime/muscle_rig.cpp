@@ -354,12 +354,17 @@ void evaluateSkinned(const MuscleLanes<Real>& block, const JointLanes<Real>& car
   }
 }
 
-// Base, tip and driver of each lane, 48 numbers a lane ([number][lane]).
+// The helper frames' columns per lane: fibre, up, side and the driver point (the base sits at the
+// origin, the tip at the insertion, both already in the block's state).
 template <typename Real>
-void evaluateHelpers(const MuscleLanes<Real>& block, const BlockState<Real>& s, Real (*out)[kLanes]) {
+struct HelperLanes {
+  Real fibre[3][kLanes], up[3][kLanes], side[3][kLanes], driver[3][kLanes];
+};
+
+template <typename Real>
+void evaluateHelpers(const MuscleLanes<Real>& block, const BlockState<Real>& s, HelperLanes<Real>* out) {
   RIGBAKE_LANE_LOOP
   for (int l = 0; l < kLanes; ++l) {
-    const Vec3<Real> origin = lane(s.origin, l), insertion = lane(s.insertion, l);
     const Vec3<Real> carried_fibre = normalized(s.origin_joint.direction(l, lane(block.fibre_local, l)));
     const Vec3<Real> carried_up_raw = normalized(s.origin_joint.direction(l, lane(block.up_local, l)));
     const Vec3<Real> carried_up = normalized(carried_up_raw - dot(carried_up_raw, carried_fibre) * carried_fibre);
@@ -373,19 +378,32 @@ void evaluateHelpers(const MuscleLanes<Real>& block, const BlockState<Real>& s, 
     const Vec3<Real> swung = select(Real(1) + cosine >= kReversedFibre<Real>, rodrigues, carried_up);
     const Vec3<Real> up = normalized(swung - dot(swung, fibre) * fibre);
     const Vec3<Real> side = cross(fibre, up);
-    const Vec3<Real> driver = origin + (block.driver_fraction[l] * current) * fibre + block.driver_offset[0][l] * up +
-                              block.driver_offset[1][l] * side;
-    const Vec3<Real> columns[12] = {fibre, up, side, origin, Real(-1) * fibre, up, Real(-1) * side, insertion,
-                                    fibre, up, side, driver};
-    for (int h = 0; h < 3; ++h) {
-      for (int c = 0; c < 4; ++c) {
-        const Vec3<Real>& v = columns[4 * h + c];
-        out[16 * h + 4 * c][l] = v.x;
-        out[16 * h + 4 * c + 1][l] = v.y;
-        out[16 * h + 4 * c + 2][l] = v.z;
-        out[16 * h + 4 * c + 3][l] = c == 3 ? Real(1) : Real(0);
-      }
-    }
+    const Vec3<Real> driver = lane(s.origin, l) + (block.driver_fraction[l] * current) * fibre +
+                              block.driver_offset[0][l] * up + block.driver_offset[1][l] * side;
+    setLane(out->fibre, l, fibre);
+    setLane(out->up, l, up);
+    setLane(out->side, l, side);
+    setLane(out->driver, l, driver);
+  }
+}
+
+// One frame of a helper: columns x, y, z and the position.
+template <typename Real>
+void storeFrame(Vec3<Real> x, Vec3<Real> y, Vec3<Real> z, Vec3<Real> position, Real* out) {
+  const Real values[16] = {x.x, x.y, x.z, 0, y.x, y.y, y.z, 0, z.x, z.y, z.z, 0, position.x, position.y, position.z, 1};
+  for (int k = 0; k < 16; ++k) out[k] = values[k];
+}
+
+// Base [f, up, side] at the origin, tip [-f, up, -side] at the insertion, driver [f, up, side] at the
+// driver point, 48 numbers a muscle.
+template <typename Real>
+void storeHelpers(const MuscleLanes<Real>& block, const BlockState<Real>& s, const HelperLanes<Real>& h, Real* out) {
+  for (int l = 0; l < block.count; ++l) {
+    const Vec3<Real> fibre = lane(h.fibre, l), up = lane(h.up, l), side = lane(h.side, l);
+    Real* frames = out + 48 * block.muscle[l];
+    storeFrame(fibre, up, side, lane(s.origin, l), frames);
+    storeFrame(Real(-1) * fibre, up, Real(-1) * side, lane(s.insertion, l), frames + 16);
+    storeFrame(fibre, up, side, lane(h.driver, l), frames + 32);
   }
 }
 
@@ -596,7 +614,8 @@ bool MuscleRigJob<Real>::Run() const {
   const bool report = !drivers.empty();
   const bool helpers = !helper_matrices.empty();
   BlockState<Real> s;
-  Real skinned[12][kLanes], helper_lanes[48][kLanes];
+  Real skinned[12][kLanes];
+  HelperLanes<Real> helper_lanes;
   for (const MuscleLanes<Real>& block : rig->blocks) {
     gatherJoints(joints, block.origin_joint, &s.origin_joint);
     gatherJoints(joints, block.insertion_joint, &s.insertion_joint);
@@ -625,10 +644,8 @@ bool MuscleRigJob<Real>::Run() const {
       for (int l = 0; l < block.count; ++l) drivers[block.muscle[l]] = {s.ratio[l], s.clamped_ratio[l], s.twist[l]};
     }
     if (helpers) {
-      evaluateHelpers(block, s, helper_lanes);
-      for (int l = 0; l < block.count; ++l) {
-        for (int e = 0; e < 48; ++e) helper_matrices.data[48 * block.muscle[l] + e] = helper_lanes[e][l];
-      }
+      evaluateHelpers(block, s, &helper_lanes);
+      storeHelpers(block, s, helper_lanes, helper_matrices.data);
     }
   }
   return true;
