@@ -350,7 +350,7 @@ TEST_CASE("runtime muscle rig: the job equals the muscle-by-muscle reference wit
     CHECK(gaps.as_float.skinned < 1e-6);
     CHECK(gaps.as_float.helpers < 1e-6);
     CHECK(gaps.as_float.ratio < 1e-6);
-    CHECK(gaps.as_float.twist < 3e-6);  // 1.7e-6 on Cyberpunk, whose float input alone moves it 1.2e-6
+    CHECK(gaps.as_float.twist < 3e-6);  // 1.8e-6 on Cyberpunk, where both floats are 1.2e-6 from double
     if (verboseRun()) {
       printGap((path + ", double").c_str(), gaps.as_double);
       printGap((path + ", float").c_str(), gaps.as_float);
