@@ -537,8 +537,10 @@ void prepareMuscleRig(MuscleRig<Real>* rig) {
       block.ratio_segment_count = std::max(block.ratio_segment_count, m.ratio_key_count - 1);
       block.twist_segment_count = std::max(block.twist_segment_count, m.twist_key_count - 1);
       block.twist_moves = block.twist_moves || twistMoves(*rig, m);
+      // A carrier that is both (origin and insertion on one joint) counts as the origin, as
+      // carrier_is_origin says.
       origins += m.carrier_joint == m.origin_joint ? 1 : 0;
-      insertions += m.carrier_joint == m.insertion_joint ? 1 : 0;
+      insertions += m.carrier_joint != m.origin_joint && m.carrier_joint == m.insertion_joint ? 1 : 0;
     }
     block.carriers = origins == block.count      ? MuscleCarriers::kOrigins
                      : insertions == block.count ? MuscleCarriers::kInsertions
