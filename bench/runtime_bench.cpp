@@ -89,6 +89,7 @@ runtime::MuscleRig<Real> castRig(const runtime::MuscleRig<double>& rig) {
   for (const runtime::ResponseKey<double>& k : rig.keys) {
     out.keys.push_back({static_cast<Real>(k.at), static_cast<Real>(k.up), static_cast<Real>(k.side), static_cast<Real>(k.scale)});
   }
+  runtime::prepareMuscleRig(&out);
   return out;
 }
 

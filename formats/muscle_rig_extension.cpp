@@ -216,6 +216,8 @@ LoadedMuscleRig readMuscleRigExtension(const tinygltf::Model& model, const Chara
     const std::string problem = runtime::rigProblem(loaded.rig);
     if (!problem.empty()) root.fail("/muscles", problem);
   }
+  // A rig with problems stays unprepared, so that no job runs it.
+  if (loaded.problems.empty()) runtime::prepareMuscleRig(&loaded.rig);
   return loaded;
 }
 

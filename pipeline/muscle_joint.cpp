@@ -163,6 +163,7 @@ runtime::MuscleRig<double> buildMuscleRig(const MuscleSet& muscles, const Skelet
     rig.muscles.push_back(muscle);
   }
   assert(std::string(runtime::rigProblem(rig)).empty() || muscles.parts.empty());
+  runtime::prepareMuscleRig(&rig);
   return rig;
 }
 

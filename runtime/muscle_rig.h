@@ -76,12 +76,78 @@ struct RigMuscle {
   int twist_key_count = 0;
 };
 
+// How many muscles Run() evaluates side by side. Its lane loops run over this many muscles' numbers
+// in plain arrays, which compilers turn into SIMD instructions (SSE2: 4 floats or 2 doubles at a time).
+constexpr int kMuscleLanes = 4;
+
+// The rig as Run() reads it, built by prepareMuscleRig() from the muscles and keys alone, so that Run()
+// need not derive it every frame: kMuscleLanes muscles per block, each quantity an array over the
+// lanes. Lanes past a block's count repeat its last muscle (evaluated, not written). Muscles whose
+// twist moves the response come first, so that the blocks after them skip the twist, and within each
+// group those carried by their origin, then by their insertion, then by another joint.
+template <typename Real>
+struct MuscleCurveLanes {  // one response curve (ratio or twist) per lane
+  // The first key's values (rest 0, 0, 1 for a curve without keys).
+  Real up[kMuscleLanes], side[kMuscleLanes], scale[kMuscleLanes];
+};
+template <typename Real>
+struct MuscleSegmentLanes {  // the segment from key k to key k + 1 of one curve, per lane
+  // 1 / (k+1.at - k.at) and the values' changes; a lane whose curve has no such segment has
+  // from = +infinity and no change.
+  Real from[kMuscleLanes], inverse_span[kMuscleLanes];
+  Real up_change[kMuscleLanes], side_change[kMuscleLanes], scale_change[kMuscleLanes];
+};
+enum class MuscleCarriers {
+  kOrigins,     // every lane's carrier is its origin joint
+  kInsertions,  // every lane's carrier is its insertion joint
+  kPicked,      // each lane's is its origin or its insertion joint (carrier_is_origin)
+  kRead,        // some lane's is another joint: the carriers' matrices are read
+};
+template <typename Real>
+struct MuscleLanes {
+  int count = 0;             // muscles in this block, 1 to kMuscleLanes
+  int muscle[kMuscleLanes];  // each lane's index in MuscleRig::muscles (and in the job's outputs)
+  int origin_joint[kMuscleLanes], insertion_joint[kMuscleLanes], carrier_joint[kMuscleLanes];
+  // Most carriers are the origin or the insertion joint, whose matrices a block reads anyway: where
+  // the lane's carrier is the origin joint (1) or not (0), and where the block takes its carriers'.
+  Real carrier_is_origin[kMuscleLanes];
+  MuscleCarriers carriers = MuscleCarriers::kRead;
+  Real origin_local[3][kMuscleLanes], insertion_local[3][kMuscleLanes];
+  Real rest_length[kMuscleLanes], compression[kMuscleLanes], stretch[kMuscleLanes];
+  // The twist driver's reference pair: two unit directions across the rest fibre a, u1 and
+  // u2 = a x u1, in the origin joint's orthonormal frame, and the same two taken into the insertion
+  // joint's orthonormal frame by the bind rotation, Q0^-1 u1 and Q0^-1 u2 (docs/runtime.md).
+  Real origin_across[2][3][kMuscleLanes], insertion_across[2][3][kMuscleLanes];
+  MuscleCurveLanes<Real> ratio_curve, twist_curve;
+  // The skinned joint's bind transform in the carrier's frame: columns 0-3, rows 0-2.
+  Real skinned_in_carrier[12][kMuscleLanes];
+  // This block's segments in MuscleRig::segments: its ratio curves' (as many as the most keys of a
+  // lane have, less one), then its twist curves'.
+  int segment_begin = 0, ratio_segment_count = 0, twist_segment_count = 0;
+  // Whether a lane's twist keys leave the rest response (up 0, side 0, scale 1): without, and without
+  // drivers asked for, Run() does not read the block's twist, which could not change the response.
+  bool twist_moves = false;
+  // For the helpers.
+  Real fibre_local[3][kMuscleLanes], up_local[3][kMuscleLanes];
+  Real driver_fraction[kMuscleLanes], driver_offset[2][kMuscleLanes];
+};
+
 template <typename Real>
 struct MuscleRig {
   int joint_count = 0;  // how many joint matrices a job must be given
   std::vector<RigMuscle<Real>> muscles;
   std::vector<ResponseKey<Real>> keys;
+  // Filled by prepareMuscleRig() from the above; call it once they are in, and again after any change.
+  // A job refuses a rig whose prepared muscle count is not its muscle count.
+  std::vector<MuscleLanes<Real>> blocks;
+  std::vector<MuscleSegmentLanes<Real>> segments;
+  std::size_t prepared_muscles = 0;
 };
+
+// Fills rig->blocks and rig->segments from rig->muscles and rig->keys (allocates: once, not per
+// frame). The rig must pass rigProblem().
+template <typename Real>
+void prepareMuscleRig(MuscleRig<Real>* rig);
 
 // What a muscle's drivers read this frame.
 template <typename Real>

@@ -44,8 +44,9 @@ export function transformDirection(m, d) {
   ];
 }
 
-// multiplyAffine(a, b): a * b for column-major affine 4x4 matrices (last row 0 0 0 1), written into
-// `out` term by term in the C++ order, so that the two round alike.
+// multiplyAffine(a, b) (runtime/affine.h; evaluateSkinned sums each entry in the same order): a * b
+// for column-major affine 4x4 matrices (last row 0 0 0 1), written into `out` term by term in the C++
+// order, so that the two round alike.
 export function multiplyAffine(a, b, out = new Array(16)) {
   for (let c = 0; c < 4; ++c) {
     for (let r = 0; r < 3; ++r) {
@@ -62,24 +63,12 @@ function storeFrame(x, y, z, position, out, offset) {
   for (let k = 0; k < 16; ++k) out[offset + k] = values[k];
 }
 
-// ---- quaternions (x, y, z, w) ----
+// ---- quaternions (x, y, z, w), for the jiggle and the player ----
 
-// multiply(a, b): the Hamilton product a b.
-export function quatMultiply(a, b) {
-  return [
-    a[3] * b[0] + a[0] * b[3] + a[1] * b[2] - a[2] * b[1],
-    a[3] * b[1] - a[0] * b[2] + a[1] * b[3] + a[2] * b[0],
-    a[3] * b[2] + a[0] * b[1] - a[1] * b[0] + a[2] * b[3],
-    a[3] * b[3] - a[0] * b[0] - a[1] * b[1] - a[2] * b[2],
-  ];
-}
-
-const quatConjugate = (q) => [-q[0], -q[1], -q[2], q[3]];
-
-// rotationOf(m): the rotation of a joint matrix as a unit quaternion. The columns are made
-// orthonormal first (Gram-Schmidt: x, then y without its x part, z = x cross y), then Shepperd's
-// method ("Quaternion from rotation matrix", J. Guidance and Control 1(3), 1978) picks the largest of
-// trace, x.x, y.y, z.z to divide by.
+// rotationOf(m) (for the jiggle and the player): the rotation of a joint matrix as a unit quaternion.
+// The columns are made orthonormal first (Gram-Schmidt: x, then y without its x part, z = x cross y),
+// then Shepperd's method ("Quaternion from rotation matrix", J. Guidance and Control 1(3), 1978) picks
+// the largest of trace, x.x, y.y, z.z to divide by.
 export function rotationOf(m) {
   const x = normalized([m[0], m[1], m[2]]);
   const y0 = [m[4], m[5], m[6]];
@@ -107,7 +96,7 @@ const clampValue = (v, lo, hi) => (v < lo ? lo : v > hi ? hi : v);
 
 // ---- the equations ----
 
-// Locators (muscleDrivers, first half): the origin and insertion ride their attach joints,
+// Locators (evaluateLocators): the origin and insertion ride their attach joints,
 //   o = W_origin * originLocal,   i = W_insertion * insertionLocal.
 export function locators(muscle, joints) {
   return {
@@ -116,34 +105,68 @@ export function locators(muscle, joints) {
   };
 }
 
-// Length ratio (muscleDrivers): r = |i - o| / L_rest, and r_c = clamp(r, compression, stretch) is what
+// Length ratio (evaluateLocators): r = |i - o| / L_rest, and r_c = clamp(r, compression, stretch) is what
 // the ratio keys are read at (the talk's createFromAttachObjs compressionFactor / stretchFactor).
 export function lengthRatio(muscle, origin, insertion) {
   const ratio = length(sub(insertion, origin)) / muscle.restLength;
   return { ratio, clampedRatio: clampValue(ratio, muscle.compression, muscle.stretch) };
 }
 
-// Twist driver (muscleDrivers, second half): delta = R_o^-1 R_i Q0^-1, the insertion joint's turn
-// relative to the origin joint since the bind pose, in the origin joint's orthonormal frame (R_o, R_i
-// from rotationOf, Q0 = insertionBindInOrigin); its twist about the rest fibre (swing-twist: the
-// quaternion's projection on the axis) is 2 atan2(delta.xyz . twistAxisLocal, delta.w), wrapped to
-// (-pi, pi].
-export function twistAngle(muscle, joints) {
-  const q0 = muscle.insertionBindInOrigin;
-  const delta = quatMultiply(
-    quatMultiply(quatConjugate(rotationOf(joints[muscle.originNode])), rotationOf(joints[muscle.insertionNode])),
-    quatConjugate(q0),
-  );
-  const axis = muscle.twistAxisLocal;
-  const along = delta[0] * axis[0] + delta[1] * axis[1] + delta[2] * axis[2];
-  let twist = 2 * Math.atan2(along, delta[3]);
-  const pi = 3.14159265358979323846;
-  if (twist > pi) twist -= 2 * pi;
-  if (twist <= -pi) twist += 2 * pi;
-  return twist;
+// orthonormalFrame(m) (orthonormalFrame): a joint matrix's first two columns made orthonormal (Gram-Schmidt: x, then y
+// without its x part, z = x cross y), the frame the twist is read in. Returns [x, y, z].
+export function orthonormalFrame(m) {
+  const x = normalized([m[0], m[1], m[2]]);
+  const y0 = [m[4], m[5], m[6]];
+  const y = normalized(sub(y0, scale(dot(y0, x), x)));
+  return [x, y, cross(x, y)];
 }
 
-// Drivers of one muscle (muscleDrivers): the locators, the length ratio and the twist.
+// Frame.apply: the frame's columns weighted by d.
+const applyFrame = (f, d) => add(add(scale(d[0], f[0]), scale(d[1], f[1])), scale(d[2], f[2]));
+
+// twistReferencePairs (prepareMuscleRig): the twist driver's reference pair, two unit directions
+// across the rest fibre a = normalize(twistAxisLocal), u1 (the coordinate axis most nearly across a,
+// made perpendicular to it) and u2 = a cross u1, in the origin joint's orthonormal frame, and the same
+// two taken into the insertion joint's by the bind rotation, v_k = Q0^-1 u_k (Q0 = insertionBindInOrigin
+// made unit). Returns {origin: [u1, u2], insertion: [v1, v2]}.
+export function twistReferencePairs(twistAxisLocal, insertionBindInOrigin) {
+  const a = normalized(twistAxisLocal);
+  let u1 = [0, 0, 0];
+  let u2 = [0, 0, 0];
+  if (dot(a, a) > 0) {
+    const [ax, ay, az] = a.map(Math.abs);
+    const axis = ax <= ay && ax <= az ? [1, 0, 0] : ay <= az ? [0, 1, 0] : [0, 0, 1];
+    u1 = normalized(sub(axis, scale(dot(axis, a), a)));
+    u2 = cross(a, u1);
+  }
+  let [x, y, z, w] = insertionBindInOrigin;
+  const n = Math.sqrt(x * x + y * y + z * z + w * w);
+  if (n > 0) [x, y, z, w] = [x / n, y / n, z / n, w / n];
+  else [x, y, z, w] = [0, 0, 0, 1];
+  // B0's columns; B0^T u = (c0 . u, c1 . u, c2 . u).
+  const c0 = [1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w)];
+  const c1 = [2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w)];
+  const c2 = [2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y)];
+  const inInsertion = (u) => [dot(c0, u), dot(c1, u), dot(c2, u)];
+  return { origin: [u1, u2], insertion: [inInsertion(u1), inInsertion(u2)] };
+}
+
+// Twist driver (evaluateTwist): the angle about the rest fibre from the origin joint's reference pair
+// (u1, u2) to the insertion joint's (v1, v2), each carried by its joint's orthonormal frame,
+//   theta = atan2(u2 . v1 - u1 . v2, u1 . v1 + u2 . v2), in (-pi, pi],
+// the swing-twist twist of delta = R_o^-1 R_i Q0^-1 about the fibre (2 atan2(delta.xyz . a, delta.w)),
+// read without quaternions (docs/runtime.md derives it). The pairs come from readMuscleRig (twistPairs).
+export function twistAngle(muscle, joints) {
+  const pairs = muscle.twistPairs || twistReferencePairs(muscle.twistAxisLocal, muscle.insertionBindInOrigin);
+  const origin = orthonormalFrame(joints[muscle.originNode]);
+  const insertion = orthonormalFrame(joints[muscle.insertionNode]);
+  const [u1, u2] = pairs.origin.map((u) => applyFrame(origin, u));
+  const [v1, v2] = pairs.insertion.map((v) => applyFrame(insertion, v));
+  const twist = Math.atan2(dot(u2, v1) - dot(u1, v2), dot(u1, v1) + dot(u2, v2));
+  return twist <= -Math.PI ? twist + 2 * Math.PI : twist;
+}
+
+// Drivers of one muscle (MuscleDrivers): the locators, the length ratio and the twist.
 export function muscleDrivers(muscle, joints) {
   const { origin, insertion } = locators(muscle, joints);
   const { ratio, clampedRatio } = lengthRatio(muscle, origin, insertion);
@@ -180,7 +203,7 @@ export function evaluateResponse(muscle, drivers) {
   return sum;
 }
 
-// The skinned joint (MuscleRigJob::Run): M = W_carrier * K * T(0, up, side) * diag(1, s, s), K the
+// The skinned joint (evaluateSkinned): M = W_carrier * K * T(0, up, side) * diag(1, s, s), K the
 // skinned joint's bind transform relative to the carrier (skinnedInCarrier). Returns both M and the
 // local matrix K T S (the skinned node is a child of the carrier node, so that is its node matrix).
 export function skinnedMatrix(muscle, joints, response) {
@@ -194,7 +217,7 @@ export function skinnedMatrix(muscle, joints, response) {
   return { world: multiplyAffine(joints[muscle.carrierNode], local), local };
 }
 
-// The helper frames (helperFrames): base at the origin with X along the fibre, tip at the insertion
+// The helper frames (evaluateHelpers): base at the origin with X along the fibre, tip at the insertion
 // aimed back, driver at o + fraction * L * fibre + offset_up * up + offset_side * side. The up vector
 // is carried by the origin joint and swung with the fibre by the minimal rotation (Rodrigues) that
 // takes the carried rest fibre to the current fibre, so it never flips. Returns 48 numbers.
@@ -317,6 +340,8 @@ export function readMuscleRig(json) {
       ratioKeys: keyArray(item.ratioKeys, `${where}/ratioKeys`, problems),
       twistKeys: keyArray(item.twistKeys, `${where}/twistKeys`, problems),
     };
+    if (muscle.twistAxisLocal && muscle.insertionBindInOrigin)
+      muscle.twistPairs = twistReferencePairs(muscle.twistAxisLocal, muscle.insertionBindInOrigin);
     if (!(muscle.restLength > 0)) problems.push(`${where}/restLength: must be positive`);
     if (!(muscle.compression > 0 && muscle.compression <= 1 && muscle.stretch >= 1))
       problems.push(`${where}: compression / stretch are not 0 < compression <= 1 <= stretch`);
