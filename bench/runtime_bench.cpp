@@ -37,6 +37,7 @@
 #include "pipeline/pose.h"
 #include "runtime/jiggle.h"
 #include "runtime/muscle_rig.h"
+#include "runtime/muscle_rig_convert.h"
 
 using namespace rigbake;
 
@@ -57,47 +58,12 @@ double secondsSince(Clock::time_point start) { return std::chrono::duration<doub
 // cannot drop the calls anyway; this also makes the figures print something that depends on them).
 volatile double g_sink = 0.0;
 
-template <typename Real>
-runtime::MuscleRig<Real> castRig(const runtime::MuscleRig<double>& rig) {
-  runtime::MuscleRig<Real> out;
-  out.joint_count = rig.joint_count;
-  for (const runtime::RigMuscle<double>& m : rig.muscles) {
-    runtime::RigMuscle<Real> r;
-    r.origin_joint = m.origin_joint;
-    r.insertion_joint = m.insertion_joint;
-    r.carrier_joint = m.carrier_joint;
-    for (int k = 0; k < 3; ++k) {
-      r.origin_local[k] = static_cast<Real>(m.origin_local[k]);
-      r.insertion_local[k] = static_cast<Real>(m.insertion_local[k]);
-      r.fibre_local[k] = static_cast<Real>(m.fibre_local[k]);
-      r.up_local[k] = static_cast<Real>(m.up_local[k]);
-      r.twist_axis_local[k] = static_cast<Real>(m.twist_axis_local[k]);
-    }
-    for (int k = 0; k < 4; ++k) r.insertion_bind_in_origin[k] = static_cast<Real>(m.insertion_bind_in_origin[k]);
-    for (int k = 0; k < 2; ++k) r.driver_offset[k] = static_cast<Real>(m.driver_offset[k]);
-    for (int k = 0; k < 16; ++k) r.skinned_in_carrier[k] = static_cast<Real>(m.skinned_in_carrier[k]);
-    r.rest_length = static_cast<Real>(m.rest_length);
-    r.compression = static_cast<Real>(m.compression);
-    r.stretch = static_cast<Real>(m.stretch);
-    r.driver_fraction = static_cast<Real>(m.driver_fraction);
-    r.ratio_key_begin = m.ratio_key_begin;
-    r.ratio_key_count = m.ratio_key_count;
-    r.twist_key_begin = m.twist_key_begin;
-    r.twist_key_count = m.twist_key_count;
-    out.muscles.push_back(r);
-  }
-  for (const runtime::ResponseKey<double>& k : rig.keys) {
-    out.keys.push_back({static_cast<Real>(k.at), static_cast<Real>(k.up), static_cast<Real>(k.side), static_cast<Real>(k.scale)});
-  }
-  runtime::prepareMuscleRig(&out);
-  return out;
-}
 
 // Nanoseconds per evaluation of the whole rig over `frames` (joint_count * 16 numbers per frame, one
 // frame after the other).
 template <typename Real>
 double rigNanoseconds(const runtime::MuscleRig<double>& source, const std::vector<double>& frames, bool helpers) {
-  const runtime::MuscleRig<Real> rig = castRig<Real>(source);
+  const runtime::MuscleRig<Real> rig = runtime::convertMuscleRig<Real>(source);
   const size_t per_frame = 16 * static_cast<size_t>(rig.joint_count);
   const std::vector<Real> matrices(frames.begin(), frames.end());
   const size_t frame_count = matrices.size() / per_frame;

@@ -15,6 +15,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/pose.h"
 #include "runtime/muscle_rig.h"
+#include "runtime/muscle_rig_convert.h"
 
 namespace rigbake {
 namespace runtime_muscle_rig_test {
@@ -204,41 +205,6 @@ Evaluation<Real> evaluate(const runtime::MuscleRig<Real>& rig, const Real* joint
 
 bool verboseRun() { return std::getenv("RIGBAKE_TEST_VERBOSE") != nullptr; }
 
-template <typename Real>
-runtime::MuscleRig<Real> castRig(const runtime::MuscleRig<double>& rig) {
-  runtime::MuscleRig<Real> out;
-  out.joint_count = rig.joint_count;
-  for (const runtime::RigMuscle<double>& m : rig.muscles) {
-    runtime::RigMuscle<Real> r;
-    r.origin_joint = m.origin_joint;
-    r.insertion_joint = m.insertion_joint;
-    r.carrier_joint = m.carrier_joint;
-    for (int k = 0; k < 3; ++k) {
-      r.origin_local[k] = static_cast<Real>(m.origin_local[k]);
-      r.insertion_local[k] = static_cast<Real>(m.insertion_local[k]);
-      r.fibre_local[k] = static_cast<Real>(m.fibre_local[k]);
-      r.up_local[k] = static_cast<Real>(m.up_local[k]);
-      r.twist_axis_local[k] = static_cast<Real>(m.twist_axis_local[k]);
-    }
-    for (int k = 0; k < 4; ++k) r.insertion_bind_in_origin[k] = static_cast<Real>(m.insertion_bind_in_origin[k]);
-    for (int k = 0; k < 2; ++k) r.driver_offset[k] = static_cast<Real>(m.driver_offset[k]);
-    for (int k = 0; k < 16; ++k) r.skinned_in_carrier[k] = static_cast<Real>(m.skinned_in_carrier[k]);
-    r.rest_length = static_cast<Real>(m.rest_length);
-    r.compression = static_cast<Real>(m.compression);
-    r.stretch = static_cast<Real>(m.stretch);
-    r.driver_fraction = static_cast<Real>(m.driver_fraction);
-    r.ratio_key_begin = m.ratio_key_begin;
-    r.ratio_key_count = m.ratio_key_count;
-    r.twist_key_begin = m.twist_key_begin;
-    r.twist_key_count = m.twist_key_count;
-    out.muscles.push_back(r);
-  }
-  for (const runtime::ResponseKey<double>& k : rig.keys) {
-    out.keys.push_back({static_cast<Real>(k.at), static_cast<Real>(k.up), static_cast<Real>(k.side), static_cast<Real>(k.scale)});
-  }
-  runtime::prepareMuscleRig(&out);
-  return out;
-}
 
 // The largest gap between the job and the reference over frames of joint matrices, |a - b| /
 // max(1, |b|) for the matrices and radians (or ratio) for the drivers. Also checks that the skinned
@@ -310,8 +276,8 @@ CharacterGaps characterGaps(const std::string& path) {
   const MuscleSet muscles = placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth);
   runtime::MuscleRig<double> source = buildMuscleRig(muscles, skeleton);
   giveTwistResponses(&source);
-  const runtime::MuscleRig<double> as_double = castRig<double>(source);
-  const runtime::MuscleRig<float> as_float = castRig<float>(source);
+  const runtime::MuscleRig<double> as_double = runtime::convertMuscleRig<double>(source);
+  const runtime::MuscleRig<float> as_float = runtime::convertMuscleRig<float>(source);
   CharacterGaps gaps;
   for (const Clip& clip : r.character.clips) {
     for (double t : sampleTimes(clip, 0.0)) {
@@ -493,8 +459,8 @@ TEST_CASE("runtime muscle rig: the job equals the muscle-by-muscle reference on 
   for (unsigned seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
     INFO("seed " << seed);
     const RandomRig random = randomRig(seed, 9, 5 * seed + 2, 40);
-    const runtime::MuscleRig<double> as_double = castRig<double>(random.rig);
-    const runtime::MuscleRig<float> as_float = castRig<float>(random.rig);
+    const runtime::MuscleRig<double> as_double = runtime::convertMuscleRig<double>(random.rig);
+    const runtime::MuscleRig<float> as_float = runtime::convertMuscleRig<float>(random.rig);
     Gap gap_double, gap_float;
     for (const std::vector<double>& frame : random.frames) {
       const std::vector<float> float_frame(frame.begin(), frame.end());
