@@ -43,34 +43,29 @@ enum Key { kCompressed = 0, kStretched = 1, kTwistPositive = 2, kTwistNegative =
 constexpr int kKeys = kFirstCompressing + kBetweenKeys;
 
 bool isTwistKey(int key) { return key >= kTwistPositive && key <= kHalfTwistNegative; }
+bool isStretchKey(int key) { return key == kStretched; }
 
-// One kind's twist keys, in quarter turns of its own side's twist (the right side's runs the other
-// way), ascending, rest (0, key -1) included.
-struct TwistKeys {
-  std::vector<double> at = {-1.0, 0.0, 1.0};
-  std::vector<int> key = {kTwistNegative, -1, kTwistPositive};
+// One kind's keys on one driver (length ratio, or twist in quarter turns of its own side's twist: the
+// right side's runs the other way), ascending, rest (key -1) included.
+struct DriverKeys {
+  std::vector<double> at;
+  std::vector<int> key;
+  void add(double a, int k) {
+    at.push_back(a);
+    key.push_back(k);
+  }
 };
 
-// `most_negative`, `most_positive`: the largest twist each way the poses reach, quarter turns.
-TwistKeys twistKeys(double most_negative, double most_positive) {
+// A quarter turn each way, and half the largest twist the poses reach each way (`most_negative`,
+// `most_positive`, quarter turns) where that is at least 5 degrees and short of a quarter turn.
+DriverKeys twistKeys(double most_negative, double most_positive) {
   constexpr double kMinHalf = 5.0 / 90.0;  // a twist the poses reach less than 10 degrees gets no half key
-  TwistKeys keys;
-  keys.at.clear();
-  keys.key.clear();
-  keys.at.push_back(-1.0);
-  keys.key.push_back(kTwistNegative);
-  if (0.5 * most_negative >= kMinHalf && most_negative < 1.0) {
-    keys.at.push_back(-0.5 * most_negative);
-    keys.key.push_back(kHalfTwistNegative);
-  }
-  keys.at.push_back(0.0);
-  keys.key.push_back(-1);
-  if (0.5 * most_positive >= kMinHalf && most_positive < 1.0) {
-    keys.at.push_back(0.5 * most_positive);
-    keys.key.push_back(kHalfTwistPositive);
-  }
-  keys.at.push_back(1.0);
-  keys.key.push_back(kTwistPositive);
+  DriverKeys keys;
+  keys.add(-1.0, kTwistNegative);
+  if (0.5 * most_negative >= kMinHalf && most_negative < 1.0) keys.add(-0.5 * most_negative, kHalfTwistNegative);
+  keys.add(0.0, -1);
+  if (0.5 * most_positive >= kMinHalf && most_positive < 1.0) keys.add(0.5 * most_positive, kHalfTwistPositive);
+  keys.add(1.0, kTwistPositive);
   return keys;
 }
 
@@ -79,18 +74,17 @@ double sideTwist(const MusclePart& part, const runtime::MuscleDrivers<double>& d
   return std::clamp((part.side == "Right" ? -drivers.twist : drivers.twist) / kQuarterTurn, -1.0, 1.0);
 }
 
-// The hat weights of a piecewise-linear curve through `at` (ascending; key -1 is rest) at `x`.
-void addHatWeights(const std::vector<double>& at, const std::vector<int>& key, double x, double weights[]) {
-  const size_t count = at.size();
+// The hat weights of the piecewise-linear curve through `keys` at `x` (rest has none).
+void addHatWeights(const DriverKeys& keys, double x, double weights[]) {
+  const size_t count = keys.at.size();
   if (count < 2) return;
   size_t j = 0;  // at[j] <= x <= at[j + 1]
-  while (j + 2 < count && at[j + 1] <= x) ++j;
-  const double lower = at[j], upper = at[j + 1];
+  while (j + 2 < count && keys.at[j + 1] <= x) ++j;
+  const double lower = keys.at[j], upper = keys.at[j + 1];
   const double t = upper > lower ? std::clamp((x - lower) / (upper - lower), 0.0, 1.0) : 0.0;
-  if (key[j] >= 0) weights[key[j]] = 1.0 - t;
-  if (key[j + 1] >= 0) weights[key[j + 1]] = t;
+  if (keys.key[j] >= 0) weights[keys.key[j]] = 1.0 - t;
+  if (keys.key[j + 1] >= 0) weights[keys.key[j + 1]] = t;
 }
-bool isStretchKey(int key) { return key == kStretched; }
 
 // A key's response at amplitude 1: offsets along up and side (metres) and scale - 1.
 struct KeyShape {
@@ -104,44 +98,33 @@ KeyShape keyShape(const MusclePart& part, int key) {
   return {part.bulge.x(), part.bulge.y(), bulge_scale};  // compression keys
 }
 
-// One kind's length-ratio keys, ascending, rest (ratio 1, key -1) included: full compression, the
-// keys between it and rest, rest, full stretch.
-struct RatioKeys {
-  std::vector<double> at;
-  std::vector<int> key;
-};
-
-// Spreads kBetweenKeys keys evenly from rest to the deepest ratio the poses reach (`least`; those
-// distinct from rest and from the full key).
-RatioKeys ratioKeys(double compression, double stretch, double least) {
+// Full compression, kBetweenKeys keys spread evenly from rest to the deepest ratio the poses reach
+// (`least`; those distinct from rest and from the full key), rest, full stretch.
+DriverKeys ratioKeys(double compression, double stretch, double least) {
   constexpr double kMinSpan = 0.02;   // a muscle the poses compress less than this keeps its full key only
   constexpr double kDistinct = 1e-3;  // ratios closer than this make one key
-  RatioKeys keys;
-  auto add = [&](double at, int key) {
-    keys.at.push_back(at);
-    keys.key.push_back(key);
-  };
+  DriverKeys keys;
   if (compression < 1.0) {
-    add(compression, kCompressed);
+    keys.add(compression, kCompressed);
     const double deepest = std::max(least, compression);
     if (1.0 - deepest >= kMinSpan) {
       for (int k = kBetweenKeys; k >= 1; --k) {
         const double at = 1.0 - (1.0 - deepest) * k / kBetweenKeys;
-        if (at - keys.at.back() >= kDistinct) add(at, kFirstCompressing + kBetweenKeys - k);
+        if (at - keys.at.back() >= kDistinct) keys.add(at, kFirstCompressing + kBetweenKeys - k);
       }
     }
   }
-  add(1.0, -1);
-  if (stretch > 1.0) add(stretch, kStretched);
+  keys.add(1.0, -1);
+  if (stretch > 1.0) keys.add(stretch, kStretched);
   return keys;
 }
 
 // Key weights of one part at its drivers (the linear set-driven keys' hat functions).
-void keyWeights(const MusclePart& part, const RatioKeys& ratio, const TwistKeys& twist,
+void keyWeights(const MusclePart& part, const DriverKeys& ratio, const DriverKeys& twist,
                 const runtime::MuscleDrivers<double>& drivers, double weights[kKeys]) {
   for (int k = 0; k < kKeys; ++k) weights[k] = 0.0;
-  addHatWeights(ratio.at, ratio.key, drivers.clamped_ratio, weights);
-  addHatWeights(twist.at, twist.key, sideTwist(part, drivers), weights);
+  addHatWeights(ratio, drivers.clamped_ratio, weights);
+  addHatWeights(twist, sideTwist(part, drivers), weights);
 }
 
 struct MuscleVertex {
@@ -278,24 +261,19 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
     for (size_t i = 0; i < poses.size(); ++i) pose_drivers[i] = evaluateRig(rig, poses[i], false).drivers;
   }
-  std::vector<double> least(kinds, 1.0);
-  for (const auto& drivers : pose_drivers) {
-    for (int m = 0; m < muscle_count; ++m) {
-      if (kind[m] >= 0) least[kind[m]] = std::min(least[kind[m]], drivers[m].clamped_ratio);
-    }
-  }
-  std::vector<double> most_negative(kinds, 0.0), most_positive(kinds, 0.0);
+  std::vector<double> least(kinds, 1.0), most_negative(kinds, 0.0), most_positive(kinds, 0.0);
   for (const auto& drivers : pose_drivers) {
     for (int m = 0; m < muscle_count; ++m) {
       if (kind[m] < 0) continue;
+      least[kind[m]] = std::min(least[kind[m]], drivers[m].clamped_ratio);
       const double twist = sideTwist(muscles->parts[m], drivers[m]);
       most_negative[kind[m]] = std::max(most_negative[kind[m]], -twist);
       most_positive[kind[m]] = std::max(most_positive[kind[m]], twist);
     }
   }
-  std::vector<TwistKeys> twist_keys(kinds);
+  std::vector<DriverKeys> twist_keys(kinds);
   for (int k = 0; k < kinds; ++k) twist_keys[k] = twistKeys(most_negative[k], most_positive[k]);
-  std::vector<RatioKeys> ratio_keys(kinds);
+  std::vector<DriverKeys> ratio_keys(kinds);
   for (int m = 0; m < muscle_count; ++m) {
     if (kind[m] >= 0)
       ratio_keys[kind[m]] = ratioKeys(muscles->parts[m].compression, muscles->parts[m].stretch, least[kind[m]]);
@@ -307,7 +285,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   Eigen::VectorXd prior = Eigen::VectorXd::Zero(unknowns);
   for (int m = 0; m < muscle_count; ++m) {
     if (kind[m] < 0) continue;
-    const RatioKeys& keys = ratio_keys[kind[m]];
+    const DriverKeys& keys = ratio_keys[kind[m]];
     for (size_t j = 0; j < keys.at.size(); ++j) {
       if (keys.key[j] >= 0 && !isStretchKey(keys.key[j]))
         prior[kind[m] * kKeys + keys.key[j]] = (1.0 - keys.at[j]) / (1.0 - muscles->parts[m].compression);
@@ -326,11 +304,11 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       };
       MuscleResponse response;
       response.fitted = true;
-      const RatioKeys& keys = ratio_keys[kind[m]];
+      const DriverKeys& keys = ratio_keys[kind[m]];
       for (size_t j = 0; j < keys.at.size(); ++j)
         response.ratio.push_back(keys.key[j] < 0 ? ResponseKey{1.0, 0.0, 0.0, 1.0} : key(keys.at[j], keys.key[j]));
       // The right side's keys are the left's mirrored: its twist of +x is the left's -x.
-      const TwistKeys& twist = twist_keys[kind[m]];
+      const DriverKeys& twist = twist_keys[kind[m]];
       const bool right = part.side == "Right";
       for (size_t j = 0; j < twist.at.size(); ++j) {
         const size_t i = right ? twist.at.size() - 1 - j : j;
@@ -489,26 +467,23 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
       const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, pose, evaluation, bind_inverse);
-      std::vector<std::array<double, kKeys>> key_weight(muscle_count);
-      for (int m = 0; m < muscle_count; ++m) {
-        if (kind[m] >= 0) keyWeights(muscles->parts[m], ratio_keys[kind[m]], twist_keys[kind[m]], evaluation.drivers[m], key_weight[m].data());
-      }
-      // d p / d (offset up) and d p / d (scale): the skinned joint's rest axes as posed.
-      std::vector<Eigen::Matrix3d> axes(muscle_count);
-      for (int m = 0; m < muscle_count; ++m) axes[m] = frame[muscleCarrierJoint(muscles->parts[m])].linear() * bind_axes[m];
       // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
-      // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), u and s the posed rest
-      // up and side axes: so a row's Jacobian needs, per muscle vertex, only g . u and g . s.
+      // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), phi_k the key's hat
+      // weight, u and s the skinned joint's rest up and side axes as posed: so a row's Jacobian needs,
+      // per muscle vertex, only g . u and g . s.
       for (int m = 0; m < muscle_count; ++m) {
         if (kind[m] < 0) continue;
+        double phi[kKeys];
+        keyWeights(muscles->parts[m], ratio_keys[kind[m]], twist_keys[kind[m]], evaluation.drivers[m], phi);
+        const Eigen::Matrix3d axes = frame[muscleCarrierJoint(muscles->parts[m])].linear() * bind_axes[m];
         MuscleKeyMotion& motion = key_motion[m];
-        motion.up_axis = axes[m].col(1);
-        motion.side_axis = axes[m].col(2);
+        motion.up_axis = axes.col(1);
+        motion.side_axis = axes.col(2);
         for (int k = 0; k < kKeys; ++k) {
           const KeyShape& shape = shapes[m][k];
-          motion.up[k] = key_weight[m][k] * shape.up;
-          motion.side[k] = key_weight[m][k] * shape.side * side_sign[m];
-          motion.scale[k] = key_weight[m][k] * shape.scale;
+          motion.up[k] = phi[k] * shape.up;
+          motion.side[k] = phi[k] * shape.side * side_sign[m];
+          motion.scale[k] = phi[k] * shape.scale;
         }
       }
 
