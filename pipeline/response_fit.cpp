@@ -1,13 +1,14 @@
 // The response fit (pipeline/response_fit.h). The talk's response has a shape: at full compression the
-// preset's bulge vector and the volume-preserving across-fibre scale 1 / sqrt(compression); at full
-// stretch the thinning 1 / sqrt(stretch). The fit keeps those shapes and solves, per muscle kind (a part
-// name: left and right share it, mirrored), four amplitudes: of the compression key, of the stretch key,
-// and of a twist key a quarter turn each way (the compression shape, driven by twist). Amplitude 1 is
-// the talk's response; linear set-driven keys in between, rest = no response. Residuals: the whole
-// body's volume change at every fitted pose, each region's change where it leaves its dead zone, and a
-// prior towards the talk's amplitudes (1 when compressed, 0 otherwise: a stretched muscle does not
-// thin unless volume asks for it). Bounds are kept by an active set: a violated amplitude is held at
-// its bound and the rest solved again.
+// preset's bulge vector and the volume-preserving across-fibre scale 1 / sqrt(compression); when
+// stretched to r the thinning 1 / sqrt(r). The fit keeps those shapes and solves, per muscle kind (a
+// part name: left and right share it, mirrored), the amplitudes of its keys: compression keys where
+// the poses compress it, one stretch key at the longest ratio they reach, and twist keys. Amplitude 1
+// is the talk's response; linear set-driven keys in between, rest = no response. Residuals: the whole
+// body's volume change at every fitted pose; one-sided rows for each region that leaves its dead zone
+// and for each muscle whose skin moves in further than its floor (a compressed muscle does not
+// deflate, a stretched one does not hollow); and a prior towards the talk's amplitudes (1 when
+// compressed, 0 otherwise: a stretched muscle does not thin unless volume asks for it). Bounds are
+// kept by an active set: a violated amplitude is held at its bound and the rest solved again.
 #include "pipeline/response_fit.h"
 
 #include <Eigen/Dense>
@@ -91,16 +92,20 @@ struct KeyShape {
   double up = 0.0, side = 0.0, scale = 0.0;
 };
 
-KeyShape keyShape(const MusclePart& part, int key) {
+// `stretched_at`: the ratio of the kind's stretch key (the volume-preserving thinning is read there).
+KeyShape keyShape(const MusclePart& part, int key, double stretched_at) {
   const double bulge_scale = part.compression < 1.0 ? 1.0 / std::sqrt(part.compression) - 1.0 : 0.0;
-  if (isStretchKey(key)) return {0.0, 0.0, 1.0 / std::sqrt(part.stretch) - 1.0};
+  if (isStretchKey(key)) return {0.0, 0.0, 1.0 / std::sqrt(stretched_at) - 1.0};
   if (isTwistKey(key)) return {part.bulge.x(), 0.0, bulge_scale};
   return {part.bulge.x(), part.bulge.y(), bulge_scale};  // compression keys
 }
 
 // Full compression, kBetweenKeys keys spread evenly from rest to the deepest ratio the poses reach
-// (`least`; those distinct from rest and from the full key), rest, full stretch.
-DriverKeys ratioKeys(double compression, double stretch, double least) {
+// (`least`; those distinct from rest and from the full key), rest, and one stretch key at the longest
+// ratio the poses reach (`most`; full stretch when they barely stretch the muscle). Beyond the last
+// key the response holds, so a pose stretched further than the clips keeps the fitted thinning
+// instead of extrapolating it.
+DriverKeys ratioKeys(double compression, double stretch, double least, double most) {
   constexpr double kMinSpan = 0.02;   // a muscle the poses compress less than this keeps its full key only
   constexpr double kDistinct = 1e-3;  // ratios closer than this make one key
   DriverKeys keys;
@@ -115,7 +120,7 @@ DriverKeys ratioKeys(double compression, double stretch, double least) {
     }
   }
   keys.add(1.0, -1);
-  if (stretch > 1.0) keys.add(stretch, kStretched);
+  if (stretch > 1.0) keys.add(most - 1.0 >= kMinSpan ? std::min(most, stretch) : stretch, kStretched);
   return keys;
 }
 
@@ -261,11 +266,12 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
     for (size_t i = 0; i < poses.size(); ++i) pose_drivers[i] = evaluateRig(rig, poses[i], false).drivers;
   }
-  std::vector<double> least(kinds, 1.0), most_negative(kinds, 0.0), most_positive(kinds, 0.0);
+  std::vector<double> least(kinds, 1.0), most(kinds, 1.0), most_negative(kinds, 0.0), most_positive(kinds, 0.0);
   for (const auto& drivers : pose_drivers) {
     for (int m = 0; m < muscle_count; ++m) {
       if (kind[m] < 0) continue;
       least[kind[m]] = std::min(least[kind[m]], drivers[m].clamped_ratio);
+      most[kind[m]] = std::max(most[kind[m]], drivers[m].clamped_ratio);
       const double twist = sideTwist(muscles->parts[m], drivers[m]);
       most_negative[kind[m]] = std::max(most_negative[kind[m]], -twist);
       most_positive[kind[m]] = std::max(most_positive[kind[m]], twist);
@@ -276,7 +282,15 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   std::vector<DriverKeys> ratio_keys(kinds);
   for (int m = 0; m < muscle_count; ++m) {
     if (kind[m] >= 0)
-      ratio_keys[kind[m]] = ratioKeys(muscles->parts[m].compression, muscles->parts[m].stretch, least[kind[m]]);
+      ratio_keys[kind[m]] = ratioKeys(muscles->parts[m].compression, muscles->parts[m].stretch, least[kind[m]], most[kind[m]]);
+  }
+
+  std::vector<double> stretched_at(kinds, 1.0);
+  for (int k = 0; k < kinds; ++k) {
+    const DriverKeys& keys = ratio_keys[k];
+    for (size_t j = 0; j < keys.at.size(); ++j) {
+      if (keys.key[j] == kStretched) stretched_at[k] = keys.at[j];
+    }
   }
 
   // The talk's amplitudes are the prior and the start: its straight segment from rest to full
@@ -299,7 +313,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       MusclePart& part = muscles->parts[m];
       const double* a = amplitudes.data() + kind[m] * kKeys;
       auto key = [&](double at, int which) {
-        const KeyShape shape = keyShape(part, which);
+        const KeyShape shape = keyShape(part, which, stretched_at[kind[m]]);
         return ResponseKey{at, a[which] * shape.up, a[which] * shape.side, 1.0 + a[which] * shape.scale};
       };
       MuscleResponse response;
@@ -341,7 +355,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   for (int m = 0; m < muscle_count; ++m) {
     bind_axes[m] = bind_inverse[m].inverse().linear();
     side_sign[m] = muscles->parts[m].side == "Right" ? -1.0 : 1.0;
-    for (int k = 0; k < kKeys; ++k) shapes[m][k] = keyShape(muscles->parts[m], k);
+    for (int k = 0; k < kKeys; ++k) shapes[m][k] = kind[m] >= 0 ? keyShape(muscles->parts[m], k, stretched_at[kind[m]]) : KeyShape{};
   }
   for (size_t p = 0; p < parts.size(); ++p) {
     FitPart part;
@@ -390,6 +404,26 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
     fit_parts.push_back(std::move(part));
   }
+  // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
+  // at least kMuscleSkinWeight of it, and that weight.
+  struct SkinVertex {
+    int part, vertex;  // fit part, moving index
+    double weight;
+  };
+  std::vector<std::vector<SkinVertex>> muscle_skin(muscle_count);
+  for (size_t p = 0; p < fit_parts.size(); ++p) {
+    for (size_t c = 0; c < fit_parts[p].muscle_vertices.size(); ++c) {
+      for (const MuscleVertex& mv : fit_parts[p].muscle_vertices[c]) {
+        if (mv.weight >= kMuscleSkinWeight) muscle_skin[mv.muscle].push_back({static_cast<int>(p), static_cast<int>(c), mv.weight});
+      }
+    }
+  }
+  std::vector<double> skin_total(muscle_count, 0.0);
+  for (int m = 0; m < muscle_count; ++m) {
+    for (const SkinVertex& sv : muscle_skin[m]) skin_total[m] += sv.weight;
+  }
+  const double hollow_limit = options.stretch_hollow_share * muscles->body_height;
+  const double compressed_limit = options.compressed_in_share * muscles->body_height;
   const double bind_body = measured.body_volume;
   std::vector<double> bind_region;
   for (size_t r : kept) bind_region.push_back(measured.region_volumes[r]);
@@ -424,7 +458,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       for (int r = 0; r < region_count; ++r) input_region_change[i][r] = signedChange(volume[r], bind_region[r]);
     });
   }
-
   // How far the poses drive each key (its largest hat weight): the prior bounds the response the poses
   // actually see, so a key the clips barely reach cannot grow without limit, and a key they never
   // reach keeps its prior value.
@@ -437,30 +470,49 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       for (int k = 0; k < kKeys; ++k) reach[kind[m] * kKeys + k] = std::max(reach[kind[m] * kKeys + k], weights[k]);
     }
   }
-  // Levenberg-Marquardt: a step that does not lower the objective is taken back and the damping raised.
+  // A stretch key sits where the poses are, so they reach it fully; its prior is measured in the talk's
+  // full-stretch thinning instead (the thinning at the key over that at full stretch), as a key at
+  // full stretch would be.
+  for (int m = 0; m < muscle_count; ++m) {
+    if (kind[m] < 0 || muscles->parts[m].stretch <= 1.0) continue;
+    const double full = 1.0 - 1.0 / std::sqrt(muscles->parts[m].stretch);
+    reach[kind[m] * kKeys + kStretched] = std::min(reach[kind[m] * kKeys + kStretched], (1.0 - 1.0 / std::sqrt(stretched_at[kind[m]])) / full);
+  }
+  // Levenberg-Marquardt over a model with two kinds of rows: rows always kept (the whole body's change
+  // at every pose: J x = rhs) and one-sided rows, hinges, that count only while violated (slack c + j.x
+  // >= 0; violated, their square is in the objective): a region's dead zone, a muscle skin's floor. A
+  // hinge is a candidate for the step's model when it is violated or within a band of its bound, so a
+  // step sees the bounds it is about to cross instead of learning of them from a rejected step. A
+  // step that does not lower the objective is taken back and the damping raised.
+  struct LinearModel {
+    std::vector<Eigen::VectorXd> rows, hinges;
+    std::vector<double> rhs, slack;
+  };
   Eigen::VectorXd best_theta = theta;
   double best_objective = std::numeric_limits<double>::infinity();
   double best_rms = 0.0;
-  Eigen::MatrixXd best_a;
-  Eigen::VectorXd best_b;
-  double damping = 1e-3;
-  for (int iteration = 0; iteration <= options.iterations; ++iteration) {
+  LinearModel best_model;
+  double damping = options.initial_damping;
+  const double region_band = options.region_band;
+  const double skin_band = options.skin_band_share * muscles->body_height;
+  const int iterations = options.iterations;
+  for (int iteration = 0; iteration <= iterations; ++iteration) {
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
     // Each pose's rows are built on its own and joined in pose order, so any thread count gives the
     // same system. The last pass only measures: its Jacobian rows would be thrown away.
-    const bool measure_only = iteration == options.iterations;
+    const bool measure_only = iteration == iterations;
     struct PoseRows {
-      std::vector<Eigen::VectorXd> rows;
-      std::vector<double> rhs;
+      LinearModel model;
       double body_square = 0.0;
+      double violation = 0.0;  // the violated hinges' squares, candidates or not
     };
     std::vector<PoseRows> pose_rows(poses.size());
     // A few poses per chunk, which keeps its posed vertices and gradients from pose to pose.
     constexpr size_t kPosesPerChunk = 4;
     parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
-    std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size());
-    std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size());
+    std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size()), moved(fit_parts.size());
+    std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size()), normals(fit_parts.size());
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
     for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
@@ -470,7 +522,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
       // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), phi_k the key's hat
       // weight, u and s the skinned joint's rest up and side axes as posed: so a row's Jacobian needs,
-      // per muscle vertex, only g . u and g . s.
+      // per muscle vertex, only g . u and g . s for the row's gradient g at it.
       for (int m = 0; m < muscle_count; ++m) {
         if (kind[m] < 0) continue;
         double phi[kKeys];
@@ -486,6 +538,34 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           motion.scale[k] = phi[k] * shape.scale;
         }
       }
+      // Adds factor * d(g . x_v)/d(amplitudes) of one moving vertex to `jacobian`.
+      auto addVertex = [&](const FitPart& part, int w, const Eigen::Vector3d& g, double factor, Eigen::VectorXd* jacobian) {
+        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
+          const MuscleKeyMotion& motion = key_motion[mv.muscle];
+          const double along_up = factor * mv.weight * g.dot(motion.up_axis);
+          const double along_side = factor * mv.weight * g.dot(motion.side_axis);
+          const double along_scale = mv.q.y() * along_up + mv.q.z() * along_side;
+          double* row_keys = jacobian->data() + kind[mv.muscle] * kKeys;
+          for (int k = 0; k < kKeys; ++k)
+            row_keys[k] += motion.up[k] * along_up + motion.side[k] * along_side + motion.scale[k] * along_scale;
+        }
+      };
+      // d(volume of patch k)/d(amplitudes), summed over the parts.
+      auto volumeJacobian = [&](size_t k) {
+        Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
+        for (size_t p = 0; p < fit_parts.size(); ++p) {
+          const FitPart& part = fit_parts[p];
+          const SplitPatch& split = part.patches[k];
+          if (split.first_vertex < 0) continue;
+          // The gradient at the fitted muscles' vertices, from the triangles around them only; the
+          // entries it touches are zeroed again for the next patch.
+          std::vector<Eigen::Vector3d>& gradient = gradients[p];
+          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
+          for (int w : split.fitted) addVertex(part, w, gradient[w], 1.0, &jacobian);
+          for (int w : split.touched) gradient[w].setZero();
+        }
+        return jacobian;
+      };
 
       double body = 0.0;
       std::vector<double> region_volume(region_count, 0.0);
@@ -501,119 +581,160 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       }
       const double body_change = signedChange(body, bind_body);
       PoseRows& out = pose_rows[i];
+      LinearModel& model = out.model;
       out.body_square = body_change * body_change;
-      // Rows: the body always; a region when it leaves its dead zone (then towards the nearer edge).
-      struct Row {
-        int region;  // -1: the whole body
-        double weight, residual;
-      };
-      std::vector<Row> active = {{-1, options.body_weight / std::max(std::abs(bind_body), 1e-30), body_change}};
+      // The body, always (weights make volumes fractions of their bind volume).
+      const double body_weight = options.body_weight / std::max(std::abs(bind_body), 1e-30);
+      model.rhs.push_back(-body_weight * std::abs(bind_body) * body_change);
+      // The body's gradient at the moving vertices, kept: the body row's Jacobian, then (normalized) the
+      // skin rows' normals.
+      {
+        Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
+        for (size_t p = 0; p < fit_parts.size(); ++p) {
+          const FitPart& part = fit_parts[p];
+          const SplitPatch& split = part.patches[0];
+          normals[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+          if (split.first_vertex < 0) continue;
+          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count].origin, 1.0, &normals[p]);
+          if (!measure_only) {
+            for (int w : split.fitted) addVertex(part, w, normals[p][w], 1.0, &jacobian);
+          }
+        }
+        if (!measure_only) model.rows.push_back(body_weight * jacobian);
+      }
+      // Each region's dead zone [lower, upper], two hinges.
       for (int r = 0; r < region_count; ++r) {
         if (bind_region[r] == 0.0) continue;
         const double change = signedChange(region_volume[r], bind_region[r]);
         const double lower = std::min(input_region_change[i][r], 0.0) - options.region_margin;
         const double upper = std::max(input_region_change[i][r], 0.0) + options.region_gain;
-        if (change >= lower && change <= upper) continue;
-        const double target = change < lower ? lower : upper;
-        active.push_back({r, options.region_weight / std::abs(bind_region[r]), change - target});
+        const double weight = options.region_weight / std::abs(bind_region[r]);
+        const double below = options.region_weight * (change - lower), above = options.region_weight * (upper - change);
+        out.violation += std::pow(std::min(below, 0.0), 2) + std::pow(std::min(above, 0.0), 2);
+        const bool near_lower = change - lower < region_band, near_upper = upper - change < region_band;
+        if (!near_lower && !near_upper) continue;
+        Eigen::VectorXd jacobian;
+        if (!measure_only) jacobian = weight * volumeJacobian(static_cast<size_t>(r) + 1);
+        if (near_lower) {
+          model.slack.push_back(below);
+          if (!measure_only) model.hinges.push_back(jacobian);
+        }
+        if (near_upper) {
+          model.slack.push_back(above);
+          if (!measure_only) model.hinges.push_back(-jacobian);
+        }
       }
-      for (const Row& row : active) {
-        out.rhs.push_back(-row.weight * std::abs(row.region < 0 ? bind_body : bind_region[row.region]) * row.residual);
+      // Each fitted muscle's skin floor: a compressed muscle's skin may not move in against the input
+      // skinning by more than compressed_limit (its mean move along the normal, weighted by the
+      // muscle's skin weight, as the figures take it), a stretched one's by more than hollow_limit.
+      // The normal at a muscle's vertex is the direction of the body's volume gradient there (its
+      // one-ring is all in the moving piece). The rig moves a vertex away from the input skinning by
+      // sum_k w_k (M_k - M_carrier(k)) p over its muscle slots k: a muscle's weight is taken from its
+      // carrier's, so the joints' own slots cancel.
+      if (options.skin_weight <= 0.0) continue;
+      for (size_t p = 0; p < fit_parts.size(); ++p) {
+        const FitPart& part = fit_parts[p];
+        for (Eigen::Vector3d& n : normals[p]) {
+          const double length = n.norm();
+          if (length > 0.0) n /= length;
+        }
+        const InfluenceSet& weights = part.weights->rig;
+        const int slots = weights.slots_per_vertex;
+        moved[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+        for (size_t c = 0; c < part.moving_vertices.size(); ++c) {
+          if (part.muscle_vertices[c].empty()) continue;
+          const int v = part.moving_vertices[c];
+          const Eigen::Vector3d& bind = part.mesh->positions[v];
+          for (int k = 0; k < slots; ++k) {
+            const int joint = weights.joints[v * slots + k];
+            const double weight = weights.weights[v * slots + k];
+            if (joint < joint_count || weight == 0.0) continue;
+            const int carrier = muscleCarrierJoint(muscles->parts[joint - joint_count]);
+            moved[p][c] += weight * (frame[joint] * bind - frame[carrier] * bind);
+          }
+        }
+      }
+      for (int m = 0; m < muscle_count; ++m) {
+        if (kind[m] < 0 || skin_total[m] <= 0.0) continue;
+        const double ratio = evaluation.drivers[m].clamped_ratio;
+        const bool compressed = ratio <= 1.0 - options.skin_min_compression, stretched = ratio > 1.0;
+        if (!compressed && !stretched) continue;
+        double mean = 0.0;
+        for (const SkinVertex& sv : muscle_skin[m])
+          mean += sv.weight * moved[sv.part][sv.vertex].dot(normals[sv.part][sv.vertex]);
+        mean /= skin_total[m];
+        const double floor = compressed ? -compressed_limit : -hollow_limit;
+        const double slack = options.skin_weight * (mean - floor);
+        out.violation += std::pow(std::min(slack, 0.0), 2);
+        if (mean - floor >= skin_band) continue;
+        model.slack.push_back(slack);
         if (measure_only) continue;
         Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
-        for (size_t p = 0; p < fit_parts.size(); ++p) {
-          const FitPart& part = fit_parts[p];
-          // The gradient of the row's patch at the fitted muscles' vertices, from the triangles around
-          // them only; the entries it touches are zeroed again for the next row.
-          std::vector<Eigen::Vector3d>& gradient = gradients[p];
-          const size_t k = static_cast<size_t>(row.region + 1);
-          const SplitPatch& split = part.patches[k];
-          if (split.first_vertex < 0) continue;
-          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
-          for (int w : split.fitted) {
-            for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-              const MuscleKeyMotion& motion = key_motion[mv.muscle];
-              const double along_up = mv.weight * gradient[w].dot(motion.up_axis);
-              const double along_side = mv.weight * gradient[w].dot(motion.side_axis);
-              const double along_scale = mv.q.y() * along_up + mv.q.z() * along_side;
-              double* row_keys = jacobian.data() + kind[mv.muscle] * kKeys;
-              for (int k = 0; k < kKeys; ++k)
-                row_keys[k] += motion.up[k] * along_up + motion.side[k] * along_side + motion.scale[k] * along_scale;
-            }
-          }
-          for (int w : split.touched) gradient[w].setZero();
-        }
-        out.rows.push_back(row.weight * jacobian);
+        for (const SkinVertex& sv : muscle_skin[m])
+          addVertex(fit_parts[sv.part], sv.vertex, normals[sv.part][sv.vertex], sv.weight / skin_total[m], &jacobian);
+        model.hinges.push_back(options.skin_weight * jacobian);
       }
     }
     });
-    std::vector<Eigen::VectorXd> rows;
-    std::vector<double> rhs;
-    double body_squares = 0.0;
+    LinearModel model;
+    double body_squares = 0.0, objective = 0.0;
     for (PoseRows& pose : pose_rows) {
       body_squares += pose.body_square;
-      rhs.insert(rhs.end(), pose.rhs.begin(), pose.rhs.end());
-      for (Eigen::VectorXd& row : pose.rows) rows.push_back(std::move(row));
+      objective += pose.violation;
+      for (double r : pose.model.rhs) objective += r * r;
+      model.rhs.insert(model.rhs.end(), pose.model.rhs.begin(), pose.model.rhs.end());
+      model.slack.insert(model.slack.end(), pose.model.slack.begin(), pose.model.slack.end());
+      for (Eigen::VectorXd& row : pose.model.rows) model.rows.push_back(std::move(row));
+      for (Eigen::VectorXd& row : pose.model.hinges) model.hinges.push_back(std::move(row));
     }
     const double rms = std::sqrt(body_squares / static_cast<double>(poses.size()));
     if (iteration == 0) report.body_rms_before = rms;
-    double objective = 0.0;
-    for (double r : rhs) objective += r * r;
     for (int u = 0; u < unknowns; ++u) {
       const double prior_residual = options.prior_weight * (theta[u] - prior[u]) * std::max(reach[u], 1e-3);
       objective += prior_residual * prior_residual;
     }
-    // The objective counts the regions that left their dead zone at this pose set; its rows exist only
-    // while measuring (the last pass builds none), so the comparison uses the same rows each time.
     const bool better = objective < best_objective;
-    // A step that gains less than this share of the objective ends the fit: measured, the mannequin's
-    // and CesiumMan's fits settle after two or three steps and then move their objective by 1e-7 of
-    // itself or less, and each further pass costs as much as the first.
+    // A step that gains less than this share of the objective ends the fit: each further pass costs
+    // as much as the first.
     constexpr double kSettled = 1e-6;
     const bool settled = better && best_objective - objective < kSettled * best_objective;
     if (better) {
       best_objective = objective;
       best_theta = theta;
       best_rms = rms;
+      best_model = std::move(model);
       damping = std::max(damping / 3.0, 1e-6);
     } else {
       theta = best_theta;
-      damping *= 10.0;
+      damping *= 4.0;
     }
-    if (iteration == options.iterations || settled) break;
+    if (iteration == iterations || settled) break;
 
-    // Solve for the step with the prior, keeping the bounds.
-    const int n = static_cast<int>(rows.size());
-    Eigen::MatrixXd a(n + unknowns, unknowns);
-    Eigen::VectorXd b(n + unknowns);
-    for (int r = 0; r < n; ++r) {
-      a.row(r) = rows[r].transpose();
-      b[r] = rhs[r];
+    // The step, from the normal equations of the best point's model: the kept rows, the prior
+    // (options.prior_weight / unit per amplitude), Marquardt's damping (lambda * diag, so it scales
+    // with how strongly each amplitude moves the volumes) and the hinges in the active set.
+    const LinearModel& at = best_model;
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
+    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(unknowns);
+    for (size_t r = 0; r < at.rows.size(); ++r) {
+      normal.selfadjointView<Eigen::Lower>().rankUpdate(at.rows[r]);
+      gradient += at.rows[r] * at.rhs[r];
     }
     for (int u = 0; u < unknowns; ++u) {
       const double unit = 1.0 / std::max(reach[u], 1e-3);
-      a.row(n + u).setZero();
-      a(n + u, u) = options.prior_weight / unit;
-      b[n + u] = options.prior_weight * (prior[u] - theta[u]) / unit;
+      const double w = options.prior_weight / unit;
+      normal(u, u) += w * w;
+      gradient[u] += w * w * (prior[u] - theta[u]);
     }
-    if (better) {
-      best_a = a;
-      best_b = b;
-    } else {
-      a = best_a;
-      b = best_b;
+    std::vector<char> active(at.hinges.size(), 0);
+    for (size_t h = 0; h < at.hinges.size(); ++h) active[h] = at.slack[h] < 0.0;
+    Eigen::MatrixXd start = normal;
+    for (size_t h = 0; h < at.hinges.size(); ++h) {
+      if (active[h]) start.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
     }
-    {
-      // Damping rows (Marquardt): sqrt(lambda * diag(A^T A)) * step = 0, so the damping scales with
-      // how strongly each amplitude moves the volumes.
-      const Eigen::Index rows_before = a.rows();
-      const Eigen::VectorXd diagonal = a.colwise().squaredNorm().transpose();
-      a.conservativeResize(rows_before + unknowns, Eigen::NoChange);
-      b.conservativeResize(rows_before + unknowns);
-      a.bottomRows(unknowns).setZero();
-      for (int u = 0; u < unknowns; ++u) a(rows_before + u, u) = std::sqrt(damping * std::max(diagonal[u], 1e-12));
-      b.tail(unknowns).setZero();
-    }
+    const Eigen::VectorXd damping_diagonal = damping * start.diagonal().cwiseMax(1e-12);
+    for (int u = 0; u < unknowns; ++u) normal(u, u) += damping_diagonal[u];
+
     auto lowerBound = [&](int u) {
       const int key = u % kKeys;
       if (isTwistKey(key)) return -options.min_twist_amplitude;
@@ -621,39 +742,74 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     };
     auto upperBound = [&](int u) {
       const int key = u % kKeys;
-      if (isStretchKey(key)) return options.max_stretch_amplitude;
+      if (isStretchKey(key)) {
+        // No thinner than min_stretch_scale across the fibre at the key.
+        const double thinning = 1.0 - 1.0 / std::sqrt(stretched_at[u / kKeys]);
+        return thinning > 0.0 ? std::min(options.max_stretch_amplitude, (1.0 - options.min_stretch_scale) / thinning) : 0.0;
+      }
       return isTwistKey(key) ? options.max_twist_amplitude : options.max_amplitude;
     };
-    // fixed[u]: 0 free, -1 held at its lower bound, +1 at its upper bound.
-    std::vector<int> fixed(unknowns, 0);
-    auto heldAt = [&](int u) { return fixed[u] < 0 ? lowerBound(u) : upperBound(u); };
-    Eigen::VectorXd step = Eigen::VectorXd::Zero(unknowns);
-    for (int pass = 0; pass <= unknowns; ++pass) {
-      std::vector<int> free;
-      Eigen::VectorXd b_free = b;
-      for (int u = 0; u < unknowns; ++u) {
-        if (fixed[u] != 0) b_free -= a.col(u) * (heldAt(u) - theta[u]);
-        else free.push_back(u);
+    // Minimizes the model with the hinges in `active` as kept rows, amplitudes within their bounds
+    // (an active set: a violated amplitude is held at its bound and the rest solved again).
+    auto boundedStep = [&]() {
+      Eigen::MatrixXd n = normal;
+      Eigen::VectorXd g = gradient;
+      for (size_t h = 0; h < at.hinges.size(); ++h) {
+        if (!active[h]) continue;
+        n.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
+        g -= at.hinges[h] * at.slack[h];
       }
-      Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(free.size()));
-      if (!free.empty()) {
-        Eigen::MatrixXd a_free(a.rows(), static_cast<Eigen::Index>(free.size()));
-        for (size_t c = 0; c < free.size(); ++c) a_free.col(static_cast<Eigen::Index>(c)) = a.col(free[c]);
-        x = a_free.colPivHouseholderQr().solve(b_free);
+      n.triangularView<Eigen::StrictlyUpper>() = n.transpose();
+      std::vector<int> held(unknowns, 0);  // 0 free, -1 at its lower bound, +1 at its upper bound
+      auto heldAt = [&](int u) { return held[u] < 0 ? lowerBound(u) : upperBound(u); };
+      Eigen::VectorXd step = Eigen::VectorXd::Zero(unknowns);
+      for (int pass = 0; pass <= unknowns; ++pass) {
+        std::vector<int> free;
+        for (int u = 0; u < unknowns; ++u) {
+          step[u] = held[u] != 0 ? heldAt(u) - theta[u] : 0.0;
+          if (held[u] == 0) free.push_back(u);
+        }
+        if (!free.empty()) {
+          const Eigen::Index count = static_cast<Eigen::Index>(free.size());
+          Eigen::MatrixXd n_free(count, count);
+          Eigen::VectorXd g_free(count);
+          const Eigen::VectorXd pushed = g - n * step;  // the held amplitudes' pull on the free ones
+          for (Eigen::Index a = 0; a < count; ++a) {
+            g_free[a] = pushed[free[a]];
+            for (Eigen::Index b = 0; b < count; ++b) n_free(a, b) = n(free[a], free[b]);
+          }
+          const Eigen::VectorXd x = n_free.ldlt().solve(g_free);
+          for (Eigen::Index a = 0; a < count; ++a) step[free[a]] = x[a];
+        }
+        bool changed = false;
+        for (int u : free) {
+          if (theta[u] + step[u] < lowerBound(u) - 1e-12) {
+            held[u] = -1;
+            changed = true;
+          } else if (theta[u] + step[u] > upperBound(u) + 1e-12) {
+            held[u] = 1;
+            changed = true;
+          }
+        }
+        if (!changed) break;
       }
-      for (int u = 0; u < unknowns; ++u) step[u] = fixed[u] != 0 ? heldAt(u) - theta[u] : 0.0;
-      for (size_t c = 0; c < free.size(); ++c) step[free[c]] = x[static_cast<Eigen::Index>(c)];
+      return step;
+    };
+    // The hinges' active set: those the step would leave violated, until it settles (semismooth
+    // Newton on the piecewise-quadratic model; measured, two to four passes).
+    constexpr int kHingePasses = 8;
+    Eigen::VectorXd step = boundedStep();
+    for (int pass = 1; pass < kHingePasses; ++pass) {
       bool changed = false;
-      for (int u : free) {
-        if (theta[u] + step[u] < lowerBound(u) - 1e-12) {
-          fixed[u] = -1;
-          changed = true;
-        } else if (theta[u] + step[u] > upperBound(u) + 1e-12) {
-          fixed[u] = 1;
+      for (size_t h = 0; h < at.hinges.size(); ++h) {
+        const char violated = at.slack[h] + at.hinges[h].dot(step) < 0.0;
+        if (violated != active[h]) {
+          active[h] = violated;
           changed = true;
         }
       }
       if (!changed) break;
+      step = boundedStep();
     }
     theta += step;
   }

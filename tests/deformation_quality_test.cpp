@@ -68,10 +68,10 @@ void checkMannequinTargets(const nlohmann::json& quality, double elbow_limit = -
                             << percent(body["ElbowFlexion"], "dual_quaternion") << " %");
   const double limit = elbow_limit >= 0.0 ? elbow_limit : std::abs(percent(body["ElbowFlexion"], "dual_quaternion"));
   CHECK(std::abs(percent(body["ElbowFlexion"], "rig")) <= limit);
-  // ArmRaise: the rig gains no more than the input skinning does (the half target is not met:
-  // docs/deformation-quality.md says why).
+  // ArmRaise: the rig gains at most 0.85 of what the input skinning gains (+0.78 % -> +0.60 %; the
+  // half target is out of reach of the preset's muscles: docs/deformation-quality.md says why).
   INFO("ArmRaise: input " << percent(body["ArmRaise"], "input") << " %, rig " << percent(body["ArmRaise"], "rig") << " %");
-  CHECK(std::abs(percent(body["ArmRaise"], "rig")) <= std::abs(percent(body["ArmRaise"], "input")) + 0.02);
+  CHECK(std::abs(percent(body["ArmRaise"], "rig")) <= 0.85 * std::abs(percent(body["ArmRaise"], "input")));
   std::string where;
   const double loss = worstRegionLoss(quality, &where);
   INFO("worst region loss beyond the input's: " << loss << " points, " << where);
@@ -109,7 +109,7 @@ TEST_CASE("deformation quality: the mannequin at 100k vertices meets the same ta
   TempDir dir;
   REQUIRE(runCli("sample --vertices 100000 -o " + (dir / "mannequin100k.glb")).exit_code == 0);
   // At 100k vertices dual quaternions change ElbowFlexion by only 0.012 % (the finer elbow folds
-  // less) and the rig by 0.017 %: held to the issue's 0.06 % (the 12k mesh's dual quaternions), not to
+  // less) and the rig by 0.015 %: held to the issue's 0.06 % (the 12k mesh's dual quaternions), not to
   // 0.012 % (not met; docs/deformation-quality.md).
   checkMannequinTargets(placeAndBake(dir, dir / "mannequin100k.glb", "dense", "gow_biped").stats["deformation_quality"], 0.056);
 }
