@@ -203,6 +203,12 @@ struct MuscleKeyMotion {
   double up[kKeys] = {}, side[kKeys] = {}, scale[kKeys] = {};
 };
 
+// One muscle's share of a Jacobian row being built: the sums of w g . u, w g . s and of their
+// combination along the scale's direction over the row's vertices of the muscle.
+struct MuscleSums {
+  double up = 0.0, side = 0.0, scale = 0.0;
+};
+
 // A fixed piece at one pose: the point its volume is summed about and that sum.
 struct FixedVolume {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
@@ -418,6 +424,37 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       }
     }
   }
+  // The moving vertices some fitted muscle's skin holds, per fit part, with all their muscle slots
+  // (fitted or kept): the skin rows' rig-minus-input moves need those and nothing else.
+  struct SkinSlots {
+    int vertex;                               // moving index
+    std::vector<std::pair<int, double>> muscles;  // muscle, weight
+  };
+  std::vector<std::vector<SkinSlots>> skin_slots(fit_parts.size());
+  {
+    std::vector<std::vector<char>> in_skin(fit_parts.size());
+    for (size_t p = 0; p < fit_parts.size(); ++p) in_skin[p].assign(fit_parts[p].moving_vertices.size(), 0);
+    for (const auto& skin : muscle_skin) {
+      for (const SkinVertex& sv : skin) in_skin[sv.part][sv.vertex] = 1;
+    }
+    for (size_t p = 0; p < fit_parts.size(); ++p) {
+      const InfluenceSet& weights = fit_parts[p].weights->rig;
+      const int slots = weights.slots_per_vertex;
+      for (size_t c = 0; c < in_skin[p].size(); ++c) {
+        if (!in_skin[p][c]) continue;
+        SkinSlots entry{static_cast<int>(c), {}};
+        const int v = fit_parts[p].moving_vertices[c];
+        for (int k = 0; k < slots; ++k) {
+          const int joint = weights.joints[v * slots + k];
+          const double weight = weights.weights[v * slots + k];
+          if (joint >= joint_count && weight != 0.0) entry.muscles.emplace_back(joint - joint_count, weight);
+        }
+        skin_slots[p].push_back(std::move(entry));
+      }
+    }
+  }
+  std::vector<int> carrier_of(muscle_count);
+  for (int m = 0; m < muscle_count; ++m) carrier_of[m] = muscleCarrierJoint(muscles->parts[m]);
   std::vector<double> skin_total(muscle_count, 0.0);
   for (int m = 0; m < muscle_count; ++m) {
     for (const SkinVertex& sv : muscle_skin[m]) skin_total[m] += sv.weight;
@@ -514,6 +551,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size()), moved(fit_parts.size());
     std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size()), normals(fit_parts.size());
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
+    std::vector<MuscleSums> sums(muscle_count);
+    std::vector<Eigen::Matrix4d> apart(muscle_count);  // a muscle's skinning matrix less its carrier's
     for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
@@ -538,21 +577,36 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           motion.scale[k] = phi[k] * shape.scale;
         }
       }
-      // Adds factor * d(g . x_v)/d(amplitudes) of one moving vertex to `jacobian`.
-      auto addVertex = [&](const FitPart& part, int w, const Eigen::Vector3d& g, double factor, Eigen::VectorXd* jacobian) {
+      // A row's Jacobian is sum over its vertices v and their muscles m of
+      // factor * w * (g_v . motion), motion linear in the keys with per-muscle coefficients: so each
+      // vertex only adds g . u, g . s and their scale combination to its muscle's three sums, and the
+      // keys are expanded once per muscle when the row is taken.
+      auto addVertex = [&](const FitPart& part, int w, const Eigen::Vector3d& g, double factor) {
         for (const MuscleVertex& mv : part.muscle_vertices[w]) {
           const MuscleKeyMotion& motion = key_motion[mv.muscle];
           const double along_up = factor * mv.weight * g.dot(motion.up_axis);
           const double along_side = factor * mv.weight * g.dot(motion.side_axis);
-          const double along_scale = mv.q.y() * along_up + mv.q.z() * along_side;
-          double* row_keys = jacobian->data() + kind[mv.muscle] * kKeys;
-          for (int k = 0; k < kKeys; ++k)
-            row_keys[k] += motion.up[k] * along_up + motion.side[k] * along_side + motion.scale[k] * along_scale;
+          MuscleSums& sum = sums[mv.muscle];
+          sum.up += along_up;
+          sum.side += along_side;
+          sum.scale += mv.q.y() * along_up + mv.q.z() * along_side;
         }
       };
-      // d(volume of patch k)/d(amplitudes), summed over the parts.
-      auto volumeJacobian = [&](size_t k) {
+      auto takeRow = [&](double weight) {
         Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
+        for (int m = 0; m < muscle_count; ++m) {
+          if (kind[m] < 0) continue;
+          MuscleSums& sum = sums[m];
+          const MuscleKeyMotion& motion = key_motion[m];
+          double* row_keys = jacobian.data() + kind[m] * kKeys;
+          for (int k = 0; k < kKeys; ++k)
+            row_keys[k] += weight * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale);
+          sum = MuscleSums{};
+        }
+        return jacobian;
+      };
+      // weight * d(volume of patch k)/d(amplitudes), summed over the parts.
+      auto volumeJacobian = [&](size_t k, double weight) {
         for (size_t p = 0; p < fit_parts.size(); ++p) {
           const FitPart& part = fit_parts[p];
           const SplitPatch& split = part.patches[k];
@@ -561,10 +615,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           // entries it touches are zeroed again for the next patch.
           std::vector<Eigen::Vector3d>& gradient = gradients[p];
           addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
-          for (int w : split.fitted) addVertex(part, w, gradient[w], 1.0, &jacobian);
+          for (int w : split.fitted) addVertex(part, w, gradient[w], 1.0);
           for (int w : split.touched) gradient[w].setZero();
         }
-        return jacobian;
+        return takeRow(weight);
       };
 
       double body = 0.0;
@@ -588,20 +642,17 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       model.rhs.push_back(-body_weight * std::abs(bind_body) * body_change);
       // The body's gradient at the moving vertices, kept: the body row's Jacobian, then (normalized) the
       // skin rows' normals.
-      {
-        Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
-        for (size_t p = 0; p < fit_parts.size(); ++p) {
-          const FitPart& part = fit_parts[p];
-          const SplitPatch& split = part.patches[0];
-          normals[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
-          if (split.first_vertex < 0) continue;
-          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count].origin, 1.0, &normals[p]);
-          if (!measure_only) {
-            for (int w : split.fitted) addVertex(part, w, normals[p][w], 1.0, &jacobian);
-          }
+      for (size_t p = 0; p < fit_parts.size(); ++p) {
+        const FitPart& part = fit_parts[p];
+        const SplitPatch& split = part.patches[0];
+        normals[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+        if (split.first_vertex < 0) continue;
+        addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count].origin, 1.0, &normals[p]);
+        if (!measure_only) {
+          for (int w : split.fitted) addVertex(part, w, normals[p][w], 1.0);
         }
-        if (!measure_only) model.rows.push_back(body_weight * jacobian);
       }
+      if (!measure_only) model.rows.push_back(takeRow(body_weight));
       // Each region's dead zone [lower, upper], two hinges.
       for (int r = 0; r < region_count; ++r) {
         if (bind_region[r] == 0.0) continue;
@@ -614,7 +665,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const bool near_lower = change - lower < region_band, near_upper = upper - change < region_band;
         if (!near_lower && !near_upper) continue;
         Eigen::VectorXd jacobian;
-        if (!measure_only) jacobian = weight * volumeJacobian(static_cast<size_t>(r) + 1);
+        if (!measure_only) jacobian = volumeJacobian(static_cast<size_t>(r) + 1, weight);
         if (near_lower) {
           model.slack.push_back(below);
           if (!measure_only) model.hinges.push_back(jacobian);
@@ -632,26 +683,18 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       // sum_k w_k (M_k - M_carrier(k)) p over its muscle slots k: a muscle's weight is taken from its
       // carrier's, so the joints' own slots cancel.
       if (options.skin_weight <= 0.0) continue;
+      for (int m = 0; m < muscle_count; ++m) apart[m] = frame[joint_count + m].matrix() - frame[carrier_of[m]].matrix();
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        for (Eigen::Vector3d& n : normals[p]) {
+        moved[p].resize(part.moving_vertices.size());
+        for (const SkinSlots& entry : skin_slots[p]) {
+          Eigen::Vector3d& n = normals[p][entry.vertex];
           const double length = n.norm();
           if (length > 0.0) n /= length;
-        }
-        const InfluenceSet& weights = part.weights->rig;
-        const int slots = weights.slots_per_vertex;
-        moved[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
-        for (size_t c = 0; c < part.moving_vertices.size(); ++c) {
-          if (part.muscle_vertices[c].empty()) continue;
-          const int v = part.moving_vertices[c];
-          const Eigen::Vector3d& bind = part.mesh->positions[v];
-          for (int k = 0; k < slots; ++k) {
-            const int joint = weights.joints[v * slots + k];
-            const double weight = weights.weights[v * slots + k];
-            if (joint < joint_count || weight == 0.0) continue;
-            const int carrier = muscleCarrierJoint(muscles->parts[joint - joint_count]);
-            moved[p][c] += weight * (frame[joint] * bind - frame[carrier] * bind);
-          }
+          const Eigen::Vector4d bind = part.mesh->positions[part.moving_vertices[entry.vertex]].homogeneous();
+          Eigen::Vector3d move = Eigen::Vector3d::Zero();
+          for (const auto& [m, weight] : entry.muscles) move += weight * (apart[m] * bind).head<3>();
+          moved[p][entry.vertex] = move;
         }
       }
       for (int m = 0; m < muscle_count; ++m) {
@@ -669,10 +712,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         if (mean - floor >= skin_band) continue;
         model.slack.push_back(slack);
         if (measure_only) continue;
-        Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
         for (const SkinVertex& sv : muscle_skin[m])
-          addVertex(fit_parts[sv.part], sv.vertex, normals[sv.part][sv.vertex], sv.weight / skin_total[m], &jacobian);
-        model.hinges.push_back(options.skin_weight * jacobian);
+          addVertex(fit_parts[sv.part], sv.vertex, normals[sv.part][sv.vertex], sv.weight / skin_total[m]);
+        model.hinges.push_back(takeRow(options.skin_weight));
       }
     }
     });
