@@ -90,9 +90,9 @@ std::vector<Eigen::Vector3d> weldedPositions(const VolumeSurface& surface, const
 }
 
 namespace {
-double tetraVolume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  return a.dot(b.cross(c)) / 6.0;
-}
+// Six times the signed volume of the tetrahedron (0, a, b, c); the sums divide by six once at the end
+// instead of once per triangle.
+double tripleProduct(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) { return a.dot(b.cross(c)); }
 
 Eigen::Vector3d holeCentre(const std::vector<int>& hole, const std::vector<Eigen::Vector3d>& welded) {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -111,13 +111,13 @@ double enclosedVolume(const ClosedPatch& patch, const std::vector<Eigen::Vector3
 double enclosedVolumeAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, const Eigen::Vector3d& origin) {
   double volume = 0.0;
   for (const auto& t : patch.triangles)
-    volume += tetraVolume(welded[t[0]] - origin, welded[t[1]] - origin, welded[t[2]] - origin);
+    volume += tripleProduct(welded[t[0]] - origin, welded[t[1]] - origin, welded[t[2]] - origin);
   for (const std::vector<int>& hole : patch.holes) {
     const Eigen::Vector3d centre = holeCentre(hole, welded) - origin;
     for (size_t k = 0; k < hole.size(); ++k)
-      volume += tetraVolume(welded[hole[k]] - origin, welded[hole[(k + 1) % hole.size()]] - origin, centre);
+      volume += tripleProduct(welded[hole[k]] - origin, welded[hole[(k + 1) % hole.size()]] - origin, centre);
   }
-  return volume;
+  return volume / 6.0;
 }
 
 std::array<double, 3> enclosedVolumes(const ClosedPatch& patch, const std::array<const std::vector<Eigen::Vector3d>*, 3>& welded) {
@@ -127,30 +127,33 @@ std::array<double, 3> enclosedVolumes(const ClosedPatch& patch, const std::array
   const int first = patch.triangles[0][0];
   const Eigen::Vector3d o0 = w0[first], o1 = w1[first], o2 = w2[first];
   for (const auto& t : patch.triangles) {
-    volumes[0] += tetraVolume(w0[t[0]] - o0, w0[t[1]] - o0, w0[t[2]] - o0);
-    volumes[1] += tetraVolume(w1[t[0]] - o1, w1[t[1]] - o1, w1[t[2]] - o1);
-    volumes[2] += tetraVolume(w2[t[0]] - o2, w2[t[1]] - o2, w2[t[2]] - o2);
+    volumes[0] += tripleProduct(w0[t[0]] - o0, w0[t[1]] - o0, w0[t[2]] - o0);
+    volumes[1] += tripleProduct(w1[t[0]] - o1, w1[t[1]] - o1, w1[t[2]] - o1);
+    volumes[2] += tripleProduct(w2[t[0]] - o2, w2[t[1]] - o2, w2[t[2]] - o2);
   }
   for (const std::vector<int>& hole : patch.holes) {
     const Eigen::Vector3d c0 = holeCentre(hole, w0) - o0, c1 = holeCentre(hole, w1) - o1, c2 = holeCentre(hole, w2) - o2;
     for (size_t k = 0; k < hole.size(); ++k) {
       const int a = hole[k], b = hole[(k + 1) % hole.size()];
-      volumes[0] += tetraVolume(w0[a] - o0, w0[b] - o0, c0);
-      volumes[1] += tetraVolume(w1[a] - o1, w1[b] - o1, c1);
-      volumes[2] += tetraVolume(w2[a] - o2, w2[b] - o2, c2);
+      volumes[0] += tripleProduct(w0[a] - o0, w0[b] - o0, c0);
+      volumes[1] += tripleProduct(w1[a] - o1, w1[b] - o1, c1);
+      volumes[2] += tripleProduct(w2[a] - o2, w2[b] - o2, c2);
     }
   }
+  for (double& volume : volumes) volume /= 6.0;
   return volumes;
 }
 
 void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded,
                             const Eigen::Vector3d& origin, double factor, std::vector<Eigen::Vector3d>* gradient) {
   std::vector<Eigen::Vector3d>& g = *gradient;
+  // One multiplication by factor / 6 per term instead of nine divisions per triangle.
+  const double scale = factor / 6.0;
   for (const auto& t : patch.triangles) {
     const Eigen::Vector3d a = welded[t[0]] - origin, b = welded[t[1]] - origin, c = welded[t[2]] - origin;
-    g[t[0]] += factor * b.cross(c) / 6.0;
-    g[t[1]] += factor * c.cross(a) / 6.0;
-    g[t[2]] += factor * a.cross(b) / 6.0;
+    g[t[0]] += scale * b.cross(c);
+    g[t[1]] += scale * c.cross(a);
+    g[t[2]] += scale * a.cross(b);
   }
   for (const std::vector<int>& hole : patch.holes) {
     // Cap triangle (a, b, centre): a and b get their terms, the centre's term is shared by the loop.
@@ -159,9 +162,9 @@ void addVolumeGradientAbout(const ClosedPatch& patch, const std::vector<Eigen::V
     for (size_t k = 0; k < hole.size(); ++k) {
       const int ia = hole[k], ib = hole[(k + 1) % hole.size()];
       const Eigen::Vector3d a = welded[ia] - origin, b = welded[ib] - origin;
-      g[ia] += factor * b.cross(centre) / 6.0;
-      g[ib] += factor * centre.cross(a) / 6.0;
-      centre_gradient += factor * a.cross(b) / 6.0;
+      g[ia] += scale * b.cross(centre);
+      g[ib] += scale * centre.cross(a);
+      centre_gradient += scale * a.cross(b);
     }
     for (int w : hole) g[w] += centre_gradient / static_cast<double>(hole.size());
   }
