@@ -14,14 +14,33 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
   VolumeSurface surface;
   const int vertex_count = static_cast<int>(part.positions.size());
   surface.weld_of_vertex.assign(vertex_count, -1);
-  std::map<std::tuple<long long, long long, long long>, int> weld_by_cell;
+  // Vertices in the same cell weld; welded vertices are numbered in the order of their first vertex.
+  // Sorted cells rather than a tree of them: the same numbering, without an allocation per vertex.
+  struct Cell {
+    long long x, y, z;
+    int vertex;
+    bool operator<(const Cell& o) const { return std::tie(x, y, z, vertex) < std::tie(o.x, o.y, o.z, o.vertex); }
+    bool sameCell(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
+  };
+  std::vector<Cell> cells(static_cast<size_t>(vertex_count));
   for (int v = 0; v < vertex_count; ++v) {
     const Eigen::Vector3d& p = part.positions[v];
-    auto cell = std::make_tuple(std::llround(p.x() / weld_tolerance), std::llround(p.y() / weld_tolerance),
-                                std::llround(p.z() / weld_tolerance));
-    auto [it, inserted] = weld_by_cell.emplace(cell, surface.weldedCount());
-    if (inserted) surface.vertex_of_weld.push_back(v);
-    surface.weld_of_vertex[v] = it->second;
+    cells[v] = {std::llround(p.x() / weld_tolerance), std::llround(p.y() / weld_tolerance), std::llround(p.z() / weld_tolerance), v};
+  }
+  std::sort(cells.begin(), cells.end());
+  std::vector<int> first_of_vertex(static_cast<size_t>(vertex_count));  // the first vertex of its cell
+  for (size_t i = 0, group = 0; i < cells.size(); ++i) {
+    if (i > 0 && !cells[i].sameCell(cells[i - 1])) group = i;
+    first_of_vertex[cells[i].vertex] = cells[group].vertex;
+  }
+  for (int v = 0; v < vertex_count; ++v) {
+    const int first = first_of_vertex[v];
+    if (first == v) {
+      surface.weld_of_vertex[v] = surface.weldedCount();
+      surface.vertex_of_weld.push_back(v);
+    } else {
+      surface.weld_of_vertex[v] = surface.weld_of_vertex[first];
+    }
   }
   std::vector<int> all;
   for (size_t t = 0; t < part.triangles.size(); ++t) {
@@ -39,19 +58,23 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
 
 ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles) {
   ClosedPatch patch;
-  // Directed edge -> how often it is used; a boundary edge is used once and its reverse never.
-  std::map<std::pair<int, int>, int> directed;
+  // Directed edges, sorted: a boundary edge is used once and its reverse never.
+  std::vector<std::pair<int, int>> directed;
+  directed.reserve(3 * triangles.size());
   for (int index : triangles) {
     const std::array<int, 3>& w = surface.whole.triangles[index];
     patch.triangles.push_back(w);
-    for (int k = 0; k < 3; ++k) ++directed[{w[k], w[(k + 1) % 3]}];
+    for (int k = 0; k < 3; ++k) directed.emplace_back(w[k], w[(k + 1) % 3]);
   }
+  std::sort(directed.begin(), directed.end());
   // A hole's loop runs against the triangles' winding (the boundary edge a->b of a triangle is b->a on
   // the cap), so caps face outwards like the surface. Loops start at their smallest unused edge, which
   // makes the result independent of everything but the triangles.
   std::map<int, std::vector<int>> next_on_boundary;
-  for (const auto& [edge, count] : directed) {
-    if (count == 1 && directed.find({edge.second, edge.first}) == directed.end())
+  for (size_t i = 0; i < directed.size(); ++i) {
+    const std::pair<int, int>& edge = directed[i];
+    const bool once = (i == 0 || directed[i - 1] != edge) && (i + 1 == directed.size() || directed[i + 1] != edge);
+    if (once && !std::binary_search(directed.begin(), directed.end(), std::make_pair(edge.second, edge.first)))
       next_on_boundary[edge.second].push_back(edge.first);
   }
   std::map<std::pair<int, int>, bool> used;
