@@ -12,6 +12,27 @@ MuscleResponse defaultMuscleResponse(double compression, double stretch, const E
   return response;
 }
 
+MuscleResponse defaultResponse(const MusclePart& part) {
+  if (part.kind == PartKind::kMuscle) return defaultMuscleResponse(part.compression, part.stretch, part.bulge);
+  MuscleResponse none;
+  if (part.compression < 1.0) none.ratio.push_back({part.compression, 0.0, 0.0, 1.0});
+  none.ratio.push_back({1.0, 0.0, 0.0, 1.0});
+  if (part.stretch > 1.0) none.ratio.push_back({part.stretch, 0.0, 0.0, 1.0});
+  return none;
+}
+
+const char* partKindName(PartKind kind) { return kind == PartKind::kCorrective ? "corrective" : "muscle"; }
+
+bool parsePartKind(const std::string& name, PartKind* kind) {
+  for (PartKind candidate : {PartKind::kMuscle, PartKind::kCorrective}) {
+    if (name == partKindName(candidate)) {
+      *kind = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
 namespace {
 // Linear interpolation of a curve at `at`, as runtime/muscle_rig.cpp evaluates it.
 ResponseKey curveAt(const std::vector<ResponseKey>& keys, double at) {

@@ -33,6 +33,16 @@ struct MuscleResponse {
   bool fitted = false;             // the keys came from `bake --response fit`
 };
 
+// What a part is. A muscle is the talk's muscle joint group: it bulges when it shortens and may thin
+// when it lengthens, taking skin weight from the joint its field covers most. A corrective is the talk's
+// "SDK joint" ("Tyr's elbow is corrected by SDK joints"): the same driver (its span's length ratio) and
+// the same skinned joint, but a set-driven offset of either sign, taking skin weight from one named
+// carrier joint and only where the skin blends the joints on either side of its span (the web plain
+// skinning stretches across a raised arm's armpit). docs/muscle-model.md, "Correctives".
+enum class PartKind { kMuscle, kCorrective };
+const char* partKindName(PartKind kind);                   // "muscle", "corrective"
+bool parsePartKind(const std::string& name, PartKind* kind);  // false for any other name
+
 struct MusclePart {
   std::string group;  // export group: Arms, Deltoid, LatissimusDorsi, PectoralisMajor, TeresMajor, Trapezius
   std::string name;   // part name without side: TrapeziusA, Bicep, ...
@@ -52,8 +62,12 @@ struct MusclePart {
   // from `bulge` and the factors when the file has no curves (defaultMuscleResponse()).
   MuscleResponse response;
   // The joint the skinned joint rides and takes skin weight from; -1 until the bake chooses it
-  // (pipeline/muscle_weights.h chooseCarrierJoints()).
+  // (pipeline/muscle_weights.h chooseCarrierJoints()). A corrective's is fixed by its carrier landmark.
   int carrier = -1;
+  PartKind kind = PartKind::kMuscle;
+  // Correctives only: the landmark whose joint carries it, with its side suffix (e.g. "clavicle_l"), so
+  // that a retarget or a muscle file read on another character finds the same joint again.
+  std::string carrier_landmark;
 
   std::string fullName() const { return side + name; }  // e.g. LeftTrapeziusA
 };
@@ -62,6 +76,10 @@ struct MusclePart {
 // the volume-preserving across-fibre scale 1 / sqrt(compression), at rest and when stretched nothing
 // (a stretched muscle does not pull the skin in). No twist response.
 MuscleResponse defaultMuscleResponse(double compression, double stretch, const Eigen::Vector2d& bulge);
+
+// The response a part starts with: a muscle's is defaultMuscleResponse(); a corrective's is none at all
+// (flat keys at full compression, rest and full stretch) until a fit or an artist gives it one.
+MuscleResponse defaultResponse(const MusclePart& part);
 
 // "" when the curves are usable: keys ascending, finite, scale > 0, and no response at rest (ratio 1,
 // twist 0), so that the bind pose is unchanged; otherwise what is wrong.

@@ -1,11 +1,27 @@
 #include "anatomy/placement.h"
 
+#include <algorithm>
+#include <cctype>
 #include <map>
 
 #include "anatomy/error.h"
 #include "anatomy/formula_eval.h"
 
 namespace rigbake {
+
+std::string correctivePartName(const std::string& name, const std::string& carrier_landmark) {
+  std::string out = name;
+  bool start = true;
+  for (char c : carrier_landmark) {
+    if (c == '_') {
+      start = true;
+      continue;
+    }
+    out += start ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+    start = false;
+  }
+  return out;
+}
 
 MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector3d& world) {
   MuscleLocator locator;
@@ -49,6 +65,10 @@ MusclePart mirrorPart(const MusclePart& left, const Skeleton& skeleton, const La
   right.origin = locatorOn(skeleton, origin_joint, body.mirror(left.origin.world));
   right.insertion = locatorOn(skeleton, insertion_joint, body.mirror(left.insertion.world));
   right.driver = locatorOn(skeleton, origin_joint, body.mirror(left.driver.world));
+  if (left.kind == PartKind::kCorrective) {
+    right.carrier_landmark = twinLandmark(left.carrier_landmark);
+    right.carrier = landmarks.get(right.carrier_landmark).joint;
+  }
   return right;
 }
 
@@ -81,6 +101,7 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
       part.group = spec.group;
       part.name = spec.name;
       part.side = "Left";
+      part.kind = spec.kind;
       int origin_joint = landmarks.get(origin_attach).joint;
       part.origin = locatorOn(skeleton, origin_joint, origin);
       part.insertion = locatorOn(skeleton, landmarks.get(insertion_attach).joint, insertion);
@@ -89,9 +110,28 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
       part.stretch = spec.stretch;
       part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
       part.weight_radius = spec.weight_radius_ref_m * scale;
-      part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
-      if (sides != Sides::kLeft) rights.push_back(mirrorPart(part, skeleton, landmarks, origin_attach, insertion_attach));
-      lefts.push_back(std::move(part));
+      part.response = defaultResponse(part);
+      // A muscle is one part; a corrective one part per carrier its skeleton resolves (a carrier whose
+      // joint an earlier one has would only split that joint's weight between two equal joints).
+      std::vector<MusclePart> made;
+      if (spec.kind == PartKind::kMuscle) made.push_back(part);
+      std::vector<int> carrier_joints;
+      for (const std::string& carrier : spec.carriers) {
+        const std::string sided = sidedName(carrier, "l");
+        if (!landmarks.has(sided) || !landmarks.has(twinLandmark(sided))) continue;
+        const int joint = landmarks.get(sided).joint;
+        if (std::find(carrier_joints.begin(), carrier_joints.end(), joint) != carrier_joints.end()) continue;
+        carrier_joints.push_back(joint);
+        MusclePart carried = part;
+        carried.name = correctivePartName(spec.name, carrier);
+        carried.carrier_landmark = sided;
+        carried.carrier = joint;
+        made.push_back(std::move(carried));
+      }
+      for (MusclePart& one : made) {
+        if (sides != Sides::kLeft) rights.push_back(mirrorPart(one, skeleton, landmarks, origin_attach, insertion_attach));
+        lefts.push_back(std::move(one));
+      }
     } catch (const Error& error) {
       if (!spec.optional || error.code() != "LANDMARK_UNRESOLVED") throw;
     }

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "anatomy/muscle_set.h"
 #include "anatomy/point_formula.h"
 
 namespace rigbake {
@@ -57,8 +58,16 @@ struct PresetPart {
   double bulge[2] = {0.0, 0.0};
   double weight_radius_ref_m = 0.0;  // 0: derive from the body measure
   bool optional = false;  // skipped (both sides) when a landmark it needs does not resolve
+  PartKind kind = PartKind::kMuscle;
+  // Correctives: the landmarks whose joints carry them, one part each, named name + the landmark in
+  // UpperCamelCase (correctivePartName()). A carrier the skeleton does not resolve, or whose joint an
+  // earlier carrier of the entry already has, makes no part.
+  std::vector<std::string> carriers;
   std::string pointer;
 };
+
+// "Axilla" carried by "upper_arm" is "AxillaUpperArm".
+std::string correctivePartName(const std::string& name, const std::string& carrier_landmark);
 
 struct MusclePreset {
   std::string name;

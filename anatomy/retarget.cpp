@@ -129,9 +129,15 @@ bool segmentUsable(const SegmentFrame& frame, const LandmarkSet& landmarks) {
   return length > kDegenerateFraction * landmarks.body.height;
 }
 
+// The preset entry a part was placed from: a muscle's by name, a corrective's by the name it has with
+// one of the entry's carriers.
 const PresetPart* findPresetPart(const MusclePreset& preset, const MusclePart& part) {
   for (const PresetPart& spec : preset.parts) {
-    if (spec.name == part.name) return &spec;
+    if (spec.kind != part.kind) continue;
+    if (spec.kind == PartKind::kMuscle && spec.name == part.name) return &spec;
+    for (const std::string& carrier : spec.carriers) {
+      if (correctivePartName(spec.name, carrier) == part.name) return &spec;
+    }
   }
   return nullptr;
 }
@@ -343,7 +349,21 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
         key.side *= body_scale;
       }
     }
-    moved.carrier = -1;  // chosen again from the new character's weights
+    // A muscle's carrier is chosen again from the new character's weights; a corrective's is the joint
+    // of the same landmark there.
+    // of the same landmark there. As a placement does, a corrective whose carrier the new character
+    // does not resolve, or whose carrier joint a corrective of its group and side already has there
+    // (two landmarks on one joint), is left out.
+    moved.carrier = -1;
+    if (part.kind == PartKind::kCorrective) {
+      if (!dst_landmarks.has(part.carrier_landmark)) continue;
+      moved.carrier = dst_landmarks.get(part.carrier_landmark).joint;
+      const bool taken = std::any_of(out.parts.begin(), out.parts.end(), [&](const MusclePart& earlier) {
+        return earlier.kind == PartKind::kCorrective && earlier.group == moved.group && earlier.side == moved.side &&
+               earlier.carrier == moved.carrier;
+      });
+      if (taken) continue;
+    }
 
     if (carried) {
       const MuscleLocator* before[3] = {&part.origin, &part.insertion, &part.driver};

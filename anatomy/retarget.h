@@ -29,7 +29,9 @@ struct CarriedLocator {
 // joint stands for (several can ride on one joint) and its placement rule says which landmark frame
 // the locator was built in, so hand-tuned edits of a preset placement travel with the landmarks
 // they were tuned against; parts it lacks are carried in their attach landmark's frame.
-// Bulge and weight radius scale with body height; compression and stretch are unchanged.
+// Bulge and weight radius scale with body height; compression and stretch are unchanged. A corrective
+// rides the joint of its carrier landmark on `dst`, and is left out where that landmark does not resolve
+// or its joint already carries another corrective of the same group and side (as placeMuscles() does).
 // Throws RETARGET_LOCATOR_UNANCHORED (a locator rides on a joint with no landmark on or above it) and
 // RETARGET_SEGMENT_DEGENERATE (a frame's two landmarks coincide on either character), both before
 // any locator is moved; `source_file` names the muscle file in their messages. `carried`, when given,

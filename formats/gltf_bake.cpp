@@ -138,6 +138,7 @@ tinygltf::Model bakedModelAndNodes(const GltfDocument& document, const Character
     description["origin_joint"] = tinygltf::Value(skeleton.names[part.origin.joint]);
     description["insertion_joint"] = tinygltf::Value(skeleton.names[part.insertion.joint]);
     description["carrier_joint"] = tinygltf::Value(skeleton.names[muscleCarrierJoint(part)]);
+    if (part.kind != PartKind::kMuscle) description["kind"] = tinygltf::Value(std::string(partKindName(part.kind)));
     description["compression"] = tinygltf::Value(part.compression);
     description["stretch"] = tinygltf::Value(part.stretch);
     tinygltf::Value::Object extras;

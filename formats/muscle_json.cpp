@@ -85,6 +85,12 @@ std::string muscleJson(const MuscleSet& muscles, const Skeleton& skeleton, const
         {"insertion", locatorJson(part.insertion, skeleton)},
         {"driver", locatorJson(part.driver, skeleton)},
     };
+    // Muscles are written as before (their files stay byte for byte); a corrective says what it is and
+    // which landmark carries it.
+    if (part.kind == PartKind::kCorrective) {
+      parts[full]["kind"] = partKindName(part.kind);
+      parts[full]["carrier_landmark"] = part.carrier_landmark;
+    }
   }
   root["rigbake"] = {
       {"schema_version", kMuscleSchemaVersion},
@@ -120,7 +126,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
     for (const std::string& full : muscles.keys()) {
       JsonReader item = muscles.at(full);
       item.allowKeys({"group", "part", "side", "compression", "stretch", "bulge", "weight_radius", "response", "origin",
-                      "insertion", "driver"});
+                      "insertion", "driver", "kind", "carrier_landmark"});
       MusclePart part;
       part.group = item.at("group").asString();
       part.name = item.at("part").asString();
@@ -135,8 +141,18 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
       part.bulge = {bulge.at(0).asNumber(), bulge.at(1).asNumber()};
       part.weight_radius = item.has("weight_radius") ? item.at("weight_radius").asNumber() : 0.0;
-      part.response = item.has("response") ? readResponse(item.at("response"))
-                                           : defaultMuscleResponse(part.compression, part.stretch, part.bulge);
+      if (item.has("kind") && !parsePartKind(item.at("kind").asString(), &part.kind))
+        item.at("kind").fail("must be \"muscle\" or \"corrective\"");
+      if (part.kind == PartKind::kCorrective) {
+        part.carrier_landmark = item.at("carrier_landmark").asString();
+        if (!landmarks.has(part.carrier_landmark))
+          rigbake::fail("MUSCLES_MISMATCH", path + "#" + item.at("carrier_landmark").pointer(),
+                        "carrier landmark '" + part.carrier_landmark + "' is not resolved on " + set.character);
+        part.carrier = landmarks.get(part.carrier_landmark).joint;
+      } else if (item.has("carrier_landmark")) {
+        item.at("carrier_landmark").fail("only a corrective has a carrier landmark");
+      }
+      part.response = item.has("response") ? readResponse(item.at("response")) : defaultResponse(part);
       for (auto [key, locator] : {std::pair<const char*, MuscleLocator*>{"origin", &part.origin},
                                   {"insertion", &part.insertion},
                                   {"driver", &part.driver}}) {
@@ -166,7 +182,10 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
     }
     // Stable order: the preset's order, left before right, then anything the preset lacks by name.
     std::map<std::string, int> rank;
-    for (size_t i = 0; i < preset.parts.size(); ++i) rank[preset.parts[i].name] = static_cast<int>(i);
+    for (const PresetPart& spec : preset.parts) {
+      if (spec.kind == PartKind::kMuscle) rank.emplace(spec.name, static_cast<int>(rank.size()));
+      for (const std::string& carrier : spec.carriers) rank.emplace(correctivePartName(spec.name, carrier), static_cast<int>(rank.size()));
+    }
     std::stable_sort(set.parts.begin(), set.parts.end(), [&](const MusclePart& a, const MusclePart& b) {
       auto key = [&](const MusclePart& p) {
         auto it = rank.find(p.name);
@@ -182,39 +201,52 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
   for (const char* side_name : {"Left", "Right"}) {
     std::string side = side_name == std::string("Left") ? "l" : "r";
     for (const PresetPart& spec : preset.parts) {
-      std::string group_key = spec.group;
-      for (const std::string& alias : spec.group_aliases) {
-        if (!in.has(group_key) && in.has(alias)) group_key = alias;
-      }
-      if (!in.has(group_key) || !in.at(group_key).has(side_name)) continue;
-      JsonReader group = in.at(group_key).at(side_name);
-      std::string full = side_name + spec.name;
-      if (!group.has(full + "_muscleOrigin") && !group.has(full + "_muscleInsertion")) continue;
-      auto attach = [&](const std::vector<std::string>& candidates) {
-        for (const std::string& c : candidates) {
-          if (landmarks.has(sidedName(c, side))) return landmarks.get(sidedName(c, side)).joint;
+      // A muscle is read under its name; a corrective under each of its carriers' names.
+      std::vector<std::string> carriers = spec.kind == PartKind::kCorrective ? spec.carriers : std::vector<std::string>{""};
+      for (const std::string& carrier : carriers) {
+        const std::string part_name = carrier.empty() ? spec.name : correctivePartName(spec.name, carrier);
+        std::string group_key = spec.group;
+        for (const std::string& alias : spec.group_aliases) {
+          if (!in.has(group_key) && in.has(alias)) group_key = alias;
         }
-        rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
-                      "no attach landmark of " + full + " is resolved on " + set.character);
-      };
-      MusclePart part;
-      part.group = spec.group;
-      part.name = spec.name;
-      part.side = side_name;
-      int origin_joint = attach(spec.origin_attach);
-      Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
-      Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
-      Eigen::Vector3d driver =
-          group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
-      part.origin = locatorOn(skeleton, origin_joint, origin);
-      part.insertion = locatorOn(skeleton, attach(spec.insertion_attach), insertion);
-      part.driver = locatorOn(skeleton, origin_joint, driver);
-      part.compression = spec.compression;
-      part.stretch = spec.stretch;
-      part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
-      part.weight_radius = spec.weight_radius_ref_m * scale;
-      part.response = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
-      set.parts.push_back(std::move(part));
+        if (!in.has(group_key) || !in.at(group_key).has(side_name)) continue;
+        JsonReader group = in.at(group_key).at(side_name);
+        std::string full = side_name + part_name;
+        if (!group.has(full + "_muscleOrigin") && !group.has(full + "_muscleInsertion")) continue;
+        auto attach = [&](const std::vector<std::string>& candidates) {
+          for (const std::string& c : candidates) {
+            if (landmarks.has(sidedName(c, side))) return landmarks.get(sidedName(c, side)).joint;
+          }
+          rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
+                        "no attach landmark of " + full + " is resolved on " + set.character);
+        };
+        MusclePart part;
+        part.group = spec.group;
+        part.name = part_name;
+        part.side = side_name;
+        part.kind = spec.kind;
+        if (part.kind == PartKind::kCorrective) {
+          part.carrier_landmark = sidedName(carrier, side);
+          if (!landmarks.has(part.carrier_landmark))
+            rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
+                          "carrier landmark '" + part.carrier_landmark + "' of " + full + " is not resolved on " + set.character);
+          part.carrier = landmarks.get(part.carrier_landmark).joint;
+        }
+        int origin_joint = attach(spec.origin_attach);
+        Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
+        Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
+        Eigen::Vector3d driver =
+            group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
+        part.origin = locatorOn(skeleton, origin_joint, origin);
+        part.insertion = locatorOn(skeleton, attach(spec.insertion_attach), insertion);
+        part.driver = locatorOn(skeleton, origin_joint, driver);
+        part.compression = spec.compression;
+        part.stretch = spec.stretch;
+        part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
+        part.weight_radius = spec.weight_radius_ref_m * scale;
+        part.response = defaultResponse(part);
+        set.parts.push_back(std::move(part));
+      }
     }
   }
   if (set.parts.empty())

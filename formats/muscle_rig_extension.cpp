@@ -39,6 +39,8 @@ void addMuscleRigExtension(tinygltf::Model* model, const Skeleton& skeleton, con
     const runtime::RigMuscle<double>& muscle = rig.muscles[m];
     tinygltf::Value::Object item;
     item["name"] = tinygltf::Value(muscles.parts[m].fullName());
+    // Only correctives say what they are, so that a rig of muscles is written as before.
+    if (muscles.parts[m].kind != PartKind::kMuscle) item["kind"] = tinygltf::Value(std::string(partKindName(muscles.parts[m].kind)));
     item["skinnedNode"] = tinygltf::Value(nodes.skinned[m]);
     if (m < nodes.helpers.size() && !nodes.helpers[m].empty()) {
       tinygltf::Value::Array helpers;
@@ -207,7 +209,13 @@ LoadedMuscleRig readMuscleRigExtension(const tinygltf::Model& model, const Chara
     ok = in.numbers(item, "skinnedInCarrier", 16, muscle.skinned_in_carrier) && ok;
     ok = in.keys(item, "ratioKeys", &loaded.rig, &muscle.ratio_key_begin, &muscle.ratio_key_count) && ok;
     ok = in.keys(item, "twistKeys", &loaded.rig, &muscle.twist_key_begin, &muscle.twist_key_count) && ok;
+    PartKind kind = PartKind::kMuscle;
+    if (const tinygltf::Value* kind_value = jsonMember(item, "kind")) {
+      if (!kind_value->IsString() || !parsePartKind(kind_value->Get<std::string>(), &kind))
+        ok = in.fail("/kind", "must be \"muscle\" or \"corrective\"");
+    }
     if (!ok) continue;
+    loaded.kinds.push_back(kind);
     loaded.names.push_back(name->Get<std::string>());
     loaded.skinned_joint.push_back(skinned);
     loaded.rig.muscles.push_back(muscle);

@@ -153,6 +153,15 @@ LandmarkRules readLandmarkRules(const std::string& path) {
   return rules;
 }
 
+namespace {
+std::vector<std::string> presetPartNames(const PresetPart& part) {
+  if (part.kind == PartKind::kMuscle) return {part.name};
+  std::vector<std::string> names;
+  for (const std::string& carrier : part.carriers) names.push_back(correctivePartName(part.name, carrier));
+  return names;
+}
+}  // namespace
+
 MusclePreset readMusclePreset(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", kPresetCode);
@@ -169,15 +178,12 @@ MusclePreset readMusclePreset(const std::string& path) {
   for (size_t i = 0; i < muscles.arraySize(); ++i) {
     JsonReader item = muscles.at(i);
     item.allowKeys({"group", "group_aliases", "name", "why", "origin_attach", "insertion_attach", "origin", "insertion", "driver",
-                    "compression", "stretch", "bulge", "weight_radius_ref_m", "optional"});
+                    "compression", "stretch", "bulge", "weight_radius_ref_m", "optional", "kind", "carriers"});
     PresetPart part;
     part.pointer = item.pointer();
     part.group = item.at("group").asString();
     if (item.has("group_aliases")) part.group_aliases = item.at("group_aliases").asStringList();
     part.name = item.at("name").asString();
-    for (const PresetPart& earlier : preset.parts) {
-      if (earlier.name == part.name) item.at("name").fail("duplicate muscle part name '" + part.name + "'");
-    }
     part.origin_attach = item.at("origin_attach").asStringList();
     part.insertion_attach = item.at("insertion_attach").asStringList();
     for (const std::string& name : part.origin_attach) requireLandmark(item.at("origin_attach"), name);
@@ -201,6 +207,23 @@ MusclePreset readMusclePreset(const std::string& path) {
       part.bulge[1] = bulge.at(1).asNumber();
     }
     part.optional = item.has("optional") && item.at("optional").asBool();
+    if (item.has("kind") && !parsePartKind(item.at("kind").asString(), &part.kind))
+      item.at("kind").fail("must be \"muscle\" or \"corrective\"");
+    if (part.kind == PartKind::kCorrective) {
+      part.carriers = item.at("carriers").asStringList();
+      if (part.carriers.empty()) item.at("carriers").fail("must name at least one landmark");
+      for (const std::string& name : part.carriers) requireLandmark(item.at("carriers"), name);
+    } else if (item.has("carriers")) {
+      item.at("carriers").fail("only a corrective names carriers (a muscle takes weight from the joint its field covers most)");
+    }
+    // Part names are unique: a corrective's are its name with each carrier.
+    for (const std::string& name : presetPartNames(part)) {
+      for (const PresetPart& earlier : preset.parts) {
+        for (const std::string& taken : presetPartNames(earlier)) {
+          if (taken == name) item.at("name").fail("duplicate muscle part name '" + name + "'");
+        }
+      }
+    }
     if (item.has("weight_radius_ref_m")) {
       part.weight_radius_ref_m = item.at("weight_radius_ref_m").asNumber();
       if (part.weight_radius_ref_m < 0) item.at("weight_radius_ref_m").fail("must not be negative");

@@ -34,7 +34,9 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
   }
   nlohmann::json muscles = nlohmann::json::object();
   for (const MuscleQuality& muscle : quality.muscles)
-    muscles[muscle.muscle] = {{"compressed", moveJson(muscle.compressed)}, {"stretched", moveJson(muscle.stretched)}};
+    muscles[muscle.muscle] = {{"kind", partKindName(muscle.kind)},
+                              {"compressed", moveJson(muscle.compressed)},
+                              {"stretched", moveJson(muscle.stretched)}};
   return {{"units", {{"volume", "percent change against the bind pose"}, {"skin_move", "mm along the input skinning's normal, + out"}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},

@@ -155,6 +155,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     const runtime::RigMuscle<double>& rig = file.rig.rig.muscles[muscles[m].rig_index];
     part.compression = rig.compression;
     part.stretch = rig.stretch;
+    part.kind = file.rig.kinds[muscles[m].rig_index];
     muscle_set.parts.push_back(std::move(part));
   }
 
@@ -335,7 +336,18 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     draw(figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], c, time, quality.regions[worst],
          [&](size_t p, int w) { return on[p][w] != 0; });
   }
-  // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side.
+  // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side;
+  // each corrective kind where its skin moves most, compressed or stretched (a raised arm's armpit).
+  auto pictured = [&](size_t m) -> const MuscleSkinMove& {
+    const MuscleQuality& figures = quality.muscles[m];
+    if (figures.kind == PartKind::kMuscle || !figures.stretched.measured) return figures.compressed;
+    if (!figures.compressed.measured) return figures.stretched;
+    return std::abs(figures.stretched.mean) > std::abs(figures.compressed.mean) ? figures.stretched : figures.compressed;
+  };
+  auto better = [&](size_t a, size_t b) {  // is muscle a's picture a better pick than b's for their kind?
+    if (quality.muscles[a].kind == PartKind::kMuscle) return pictured(a).ratio < pictured(b).ratio;
+    return std::abs(pictured(a).mean) > std::abs(pictured(b).mean);
+  };
   std::map<std::string, int> kind_pick;
   std::vector<std::string> kind_order;
   auto kindOf = [](const std::string& name) {
@@ -344,20 +356,22 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     return name;
   };
   for (size_t m = 0; m < quality.muscles.size(); ++m) {
-    const MuscleSkinMove& move = quality.muscles[m].compressed;
-    if (!move.measured || move.ratio > kPictureMinCompression) continue;
+    const MuscleSkinMove& move = pictured(m);
+    if (!move.measured) continue;
+    if (quality.muscles[m].kind == PartKind::kMuscle && move.ratio > kPictureMinCompression) continue;
+    if (quality.muscles[m].kind == PartKind::kCorrective && move.max_in + move.max_out <= 0.0) continue;
     const std::string kind = kindOf(quality.muscles[m].muscle);
     auto it = kind_pick.find(kind);
     if (it == kind_pick.end()) {
       kind_pick[kind] = static_cast<int>(m);
       kind_order.push_back(kind);
-    } else if (move.ratio < quality.muscles[it->second].compressed.ratio) {
+    } else if (better(m, static_cast<size_t>(it->second))) {
       it->second = static_cast<int>(m);
     }
   }
   for (const std::string& kind : kind_order) {
     const int m = kind_pick[kind];
-    const MuscleSkinMove& move = quality.muscles[m].compressed;
+    const MuscleSkinMove& move = pictured(static_cast<size_t>(m));
     size_t c = 0;
     while (c < clips.size() && clips[c].name != move.clip) ++c;
     if (c == clips.size()) continue;
@@ -376,7 +390,9 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     }
     char ratio[32];
     std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);
-    draw(quality.muscles[m].muscle + " at its most compressed (length ratio " + ratio + "), " + move.clip + " at " +
+    const bool stretched = move.ratio > 1.0;
+    draw(quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") + " at its most " +
+             (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " + move.clip + " at " +
              formatSeconds(move.time),
          c, move.time, quality.muscles[m].muscle, [&](size_t p, int w) { return on[p][w] != 0; });
   }

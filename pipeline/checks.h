@@ -134,6 +134,7 @@ struct FileMuscleRig {
   runtime::MuscleRig<double> rig;
   std::vector<std::string> names;
   std::vector<int> skinned_joint;
+  std::vector<PartKind> kinds;
   std::vector<std::string> problems;
 };
 

@@ -217,6 +217,7 @@ DeformationQuality measureDeformationQuality(const Character& character, const s
   for (int m = 0; m < muscle_count; ++m) {
     MuscleQuality figures;
     figures.muscle = muscles.parts[m].fullName();
+    figures.kind = muscles.parts[m].kind;
     figures.compressed = skinMove(m, most_compressed[m], most_compressed[m].ratio < 1.0);
     figures.stretched = skinMove(m, most_stretched[m], most_stretched[m].ratio > 1.0);
     quality.muscles.push_back(std::move(figures));

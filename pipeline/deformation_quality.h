@@ -66,6 +66,7 @@ struct MuscleSkinMove {
 
 struct MuscleQuality {
   std::string muscle;
+  PartKind kind = PartKind::kMuscle;  // a corrective's skin may move either way; the muscle checks skip it
   MuscleSkinMove compressed, stretched;
 };
 

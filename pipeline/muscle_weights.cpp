@@ -59,6 +59,29 @@ void smooth(std::vector<double>* field, const SurfaceGraph& surface, const Muscl
   }
 }
 
+// Per welded vertex, min(1, gain * 4 x (1 - x)) with x the share of its weight on `joint` and the joints
+// below it (its first part vertex's weights: split vertices carry the same).
+std::vector<double> blendFactors(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface, int joint,
+                                 const MuscleWeightOptions& options) {
+  std::vector<char> below(skeleton.size(), 0);
+  for (int j = 0; j < skeleton.size(); ++j) {
+    for (int a = j; a >= 0 && !below[j]; a = skeleton.parents[a]) below[j] = a == joint;
+  }
+  std::vector<double> blend(surface.weldedCount(), 0.0);
+  const int slots = part.influences_per_vertex;
+  for (int v = static_cast<int>(part.positions.size()) - 1; v >= 0; --v) {
+    double on_side = 0.0, total = 0.0;
+    for (int k = 0; k < slots; ++k) {
+      const double weight = part.weights[v * slots + k];
+      total += weight;
+      if (below[part.joints[v * slots + k]]) on_side += weight;
+    }
+    const double x = total > 0.0 ? on_side / total : 0.0;
+    blend[surface.weld_of_vertex[v]] = std::min(1.0, options.corrective_blend_gain * 4.0 * x * (1.0 - x));
+  }
+  return blend;
+}
+
 }  // namespace
 
 double muscleWeightRadius(const MusclePart& part, double body_height) {
@@ -122,16 +145,25 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
     const MusclePart& muscle = muscles.parts[m];
     share[m].assign(surface.weldedCount(), 0.0);
     // A muscle drives the skin on its own side of the limb (its belly's side, the rest up axis): a bulge
-    // that moved the whole circumference would only shift the limb, pushing its far side in.
+    // that moved the whole circumference would only shift the limb, pushing its far side in. A
+    // corrective drives the blended skin around its span, all of it.
+    const bool corrective = muscle.kind == PartKind::kCorrective;
+    const std::vector<double> blend = corrective ? blendFactors(skeleton, part, surface, muscle.insertion.joint, options)
+                                                 : std::vector<double>();
     const Eigen::Vector3d up = muscleRestFrame(muscle, skeleton).up;
     for (int w = 0; w < surface.weldedCount(); ++w) {
       const Eigen::Vector3d& p = welded_position[w];
       const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);
       const Eigen::Vector3d away = p - closest;
       const double facing = away.norm() > 0.0 ? away.normalized().dot(up) : 1.0;
-      share[m][w] = options.peak_share * falloff(away.norm(), radii[m]) * sideFactor(facing, options);
+      share[m][w] = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options));
     }
     smooth(&share[m], surface, options);
+    // After the smoothing, so that a corrective moves no skin its carrier holds alone (skin that plain
+    // skinning does not stretch); the blend factor is as smooth as the input's weights are.
+    if (corrective) {
+      for (int w = 0; w < surface.weldedCount(); ++w) share[m][w] *= blend[w];
+    }
   }
   return share;
 }

@@ -25,6 +25,11 @@ struct MuscleWeightOptions {
   // Most influences a vertex may end with (the talk's God of War Ragnarök maximum): only the strongest
   // muscles at a vertex take weight there, so the bake's pruning to 10 loses nothing.
   int max_influences = 10;
+  // A corrective takes its share only where the skin blends the joints on either side of its span:
+  // with x the vertex's weight on its insertion joint and the joints below it, the share is scaled by
+  // min(1, corrective_blend_gain * 4 x (1 - x)), so all of it from x = 0.15 to 0.85 (gain 2), none
+  // where one side holds the vertex alone. That is where plain skinning stretches a web.
+  double corrective_blend_gain = 2.0;
 };
 
 // Radius of the weight falloff around the segment: the part's weight_radius when set, else
@@ -39,7 +44,9 @@ std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part)
 
 // share[m][w]: how much of its carrier's weight muscle m may take at welded vertex w, before the
 // influence budget: peak_share * (1 - x^2)^2 * side, x = distance to the segment / radius, side the
-// smoothstep of facing (see MuscleWeightOptions), smoothed over the surface.
+// smoothstep of facing (see MuscleWeightOptions), smoothed over the surface. A corrective's has the
+// blend factor (MuscleWeightOptions::corrective_blend_gain) in place of the side: its offset moves all
+// of the blended skin one way.
 using MuscleShares = std::vector<std::vector<double>>;
 MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface,
                           const MuscleSet& muscles, const std::vector<double>& radii, const MuscleWeightOptions& options = {});

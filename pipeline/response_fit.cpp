@@ -39,12 +39,15 @@ constexpr double kQuarterTurn = 3.14159265358979323846 / 2.0;
 constexpr int kBetweenKeys = 3;
 // Twist, likewise: plain skinning's loss grows like 1 - cos(twist), so each way gets a key at half the
 // largest twist the poses reach besides the one at a quarter turn.
+// A corrective (anatomy/muscle_set.h PartKind) also gets kBetweenKeys keys between rest and the longest
+// stretch: its offset follows plain skinning's web as a raised arm's armpit opens, which grows like a
+// muscle's loss does, and it has no twist keys.
 enum Key { kCompressed = 0, kStretched = 1, kTwistPositive = 2, kTwistNegative = 3, kHalfTwistPositive = 4,
-           kHalfTwistNegative = 5, kFirstCompressing = 6 };
-constexpr int kKeys = kFirstCompressing + kBetweenKeys;
+           kHalfTwistNegative = 5, kFirstCompressing = 6, kFirstStretching = kFirstCompressing + kBetweenKeys };
+constexpr int kKeys = kFirstStretching + kBetweenKeys;
 
 bool isTwistKey(int key) { return key >= kTwistPositive && key <= kHalfTwistNegative; }
-bool isStretchKey(int key) { return key == kStretched; }
+bool isStretchKey(int key) { return key == kStretched || key >= kFirstStretching; }
 
 // One kind's keys on one driver (length ratio, or twist in quarter turns of its own side's twist: the
 // right side's runs the other way), ascending, rest (key -1) included.
@@ -93,7 +96,9 @@ struct KeyShape {
 };
 
 // `stretched_at`: the ratio of the kind's stretch key (the volume-preserving thinning is read there).
+// A corrective's every key is its offset (the preset's bulge vector), either way; it does not scale.
 KeyShape keyShape(const MusclePart& part, int key, double stretched_at) {
+  if (part.kind == PartKind::kCorrective) return isTwistKey(key) ? KeyShape{} : KeyShape{part.bulge.x(), part.bulge.y(), 0.0};
   const double bulge_scale = part.compression < 1.0 ? 1.0 / std::sqrt(part.compression) - 1.0 : 0.0;
   if (isStretchKey(key)) return {0.0, 0.0, 1.0 / std::sqrt(stretched_at) - 1.0};
   if (isTwistKey(key)) return {part.bulge.x(), 0.0, bulge_scale};
@@ -105,7 +110,7 @@ KeyShape keyShape(const MusclePart& part, int key, double stretched_at) {
 // ratio the poses reach (`most`; full stretch when they barely stretch the muscle). Beyond the last
 // key the response holds, so a pose stretched further than the clips keeps the fitted thinning
 // instead of extrapolating it.
-DriverKeys ratioKeys(double compression, double stretch, double least, double most) {
+DriverKeys ratioKeys(double compression, double stretch, double least, double most, bool between_stretch) {
   constexpr double kMinSpan = 0.02;   // a muscle the poses compress less than this keeps its full key only
   constexpr double kDistinct = 1e-3;  // ratios closer than this make one key
   DriverKeys keys;
@@ -120,7 +125,15 @@ DriverKeys ratioKeys(double compression, double stretch, double least, double mo
     }
   }
   keys.add(1.0, -1);
-  if (stretch > 1.0) keys.add(most - 1.0 >= kMinSpan ? std::min(most, stretch) : stretch, kStretched);
+  if (stretch <= 1.0) return keys;
+  const double longest = most - 1.0 >= kMinSpan ? std::min(most, stretch) : stretch;
+  if (between_stretch && most - 1.0 >= kMinSpan) {
+    for (int k = 1; k <= kBetweenKeys; ++k) {
+      const double at = 1.0 + (longest - 1.0) * k / (kBetweenKeys + 1);
+      if (at - keys.at.back() >= kDistinct) keys.add(at, kFirstStretching + k - 1);
+    }
+  }
+  keys.add(longest, kStretched);
   return keys;
 }
 
@@ -230,7 +243,7 @@ double signedChange(double volume, double reference) { return reference != 0.0 ?
 }  // namespace
 
 bool hasPresetResponse(const MusclePart& part) {
-  const MuscleResponse preset = defaultMuscleResponse(part.compression, part.stretch, part.bulge);
+  const MuscleResponse preset = defaultResponse(part);
   auto same = [](const std::vector<ResponseKey>& a, const std::vector<ResponseKey>& b) {
     if (a.size() != b.size()) return false;
     for (size_t k = 0; k < a.size(); ++k) {
@@ -261,6 +274,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     ++report.fitted_parts;
   }
   const int kinds = static_cast<int>(kind_of_name.size());
+  std::vector<char> corrective(kinds, 0);
+  for (int m = 0; m < muscle_count; ++m) {
+    if (kind[m] >= 0) corrective[kind[m]] = muscles->parts[m].kind == PartKind::kCorrective;
+  }
   const int unknowns = kinds * kKeys;
   report.parameters = unknowns;
   if (unknowns == 0 || poses.empty()) return report;
@@ -284,11 +301,14 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
   }
   std::vector<DriverKeys> twist_keys(kinds);
-  for (int k = 0; k < kinds; ++k) twist_keys[k] = twistKeys(most_negative[k], most_positive[k]);
+  for (int k = 0; k < kinds; ++k) {
+    if (!corrective[k]) twist_keys[k] = twistKeys(most_negative[k], most_positive[k]);
+  }
   std::vector<DriverKeys> ratio_keys(kinds);
   for (int m = 0; m < muscle_count; ++m) {
     if (kind[m] >= 0)
-      ratio_keys[kind[m]] = ratioKeys(muscles->parts[m].compression, muscles->parts[m].stretch, least[kind[m]], most[kind[m]]);
+      ratio_keys[kind[m]] = ratioKeys(muscles->parts[m].compression, muscles->parts[m].stretch, least[kind[m]], most[kind[m]],
+                                      corrective[kind[m]] != 0);
   }
 
   std::vector<double> stretched_at(kinds, 1.0);
@@ -301,10 +321,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
 
   // The talk's amplitudes are the prior and the start: its straight segment from rest to full
   // compression passes a key at ratio r at (1 - r) / (1 - compression) of the full key; a stretched
-  // muscle does nothing.
+  // muscle does nothing, nor does a corrective until the volumes ask for it.
   Eigen::VectorXd prior = Eigen::VectorXd::Zero(unknowns);
   for (int m = 0; m < muscle_count; ++m) {
-    if (kind[m] < 0) continue;
+    if (kind[m] < 0 || corrective[kind[m]]) continue;
     const DriverKeys& keys = ratio_keys[kind[m]];
     for (size_t j = 0; j < keys.at.size(); ++j) {
       if (keys.key[j] >= 0 && !isStretchKey(keys.key[j]))
@@ -327,7 +347,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       const DriverKeys& keys = ratio_keys[kind[m]];
       for (size_t j = 0; j < keys.at.size(); ++j)
         response.ratio.push_back(keys.key[j] < 0 ? ResponseKey{1.0, 0.0, 0.0, 1.0} : key(keys.at[j], keys.key[j]));
-      // The right side's keys are the left's mirrored: its twist of +x is the left's -x.
+      // The right side's keys are the left's mirrored: its twist of +x is the left's -x. A corrective
+      // has no twist curve.
       const DriverKeys& twist = twist_keys[kind[m]];
       const bool right = part.side == "Right";
       for (size_t j = 0; j < twist.at.size(); ++j) {
@@ -511,7 +532,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // full-stretch thinning instead (the thinning at the key over that at full stretch), as a key at
   // full stretch would be.
   for (int m = 0; m < muscle_count; ++m) {
-    if (kind[m] < 0 || muscles->parts[m].stretch <= 1.0) continue;
+    if (kind[m] < 0 || corrective[kind[m]] || muscles->parts[m].stretch <= 1.0) continue;
     const double full = 1.0 - 1.0 / std::sqrt(muscles->parts[m].stretch);
     reach[kind[m] * kKeys + kStretched] = std::min(reach[kind[m] * kKeys + kStretched], (1.0 - 1.0 / std::sqrt(stretched_at[kind[m]])) / full);
   }
@@ -696,7 +717,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         }
       }
       for (int m = 0; m < muscle_count; ++m) {
-        if (kind[m] < 0 || skin_total[m] <= 0.0) continue;
+        // A corrective's skin may go either way: that is what it is for.
+        if (kind[m] < 0 || corrective[kind[m]] || skin_total[m] <= 0.0) continue;
         const double ratio = evaluation.drivers[m].clamped_ratio;
         const bool compressed = ratio <= 1.0 - options.skin_min_compression, stretched = ratio > 1.0;
         if (!compressed && !stretched) continue;
@@ -777,11 +799,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
 
     auto lowerBound = [&](int u) {
       const int key = u % kKeys;
+      if (corrective[u / kKeys]) return -options.max_corrective_amplitude;
       if (isTwistKey(key)) return -options.min_twist_amplitude;
       return isStretchKey(key) ? 0.0 : options.min_compression_fraction * prior[u];
     };
     auto upperBound = [&](int u) {
       const int key = u % kKeys;
+      if (corrective[u / kKeys]) return options.max_corrective_amplitude;
       if (isStretchKey(key)) {
         // No thinner than min_stretch_scale across the fibre at the key.
         const double thinning = 1.0 - 1.0 / std::sqrt(stretched_at[u / kKeys]);

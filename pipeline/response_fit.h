@@ -61,6 +61,8 @@ struct ResponseFitOptions {
   double min_stretch_scale = 0.5;
   double max_twist_amplitude = 1.5;
   double min_twist_amplitude = 0.0;
+  // A corrective's keys: [-max, max] x its offset (the preset's bulge vector), either way.
+  double max_corrective_amplitude = 4.0;
 };
 
 struct ResponseFitReport {
@@ -82,7 +84,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
                                      const std::vector<char>& fit, MuscleSet* muscles,
                                      const ResponseFitOptions& options = {}, int threads = 1);
 
-// True when `part` still has the response its preset gives it (defaultMuscleResponse()): what
+// True when `part` still has the response its preset gives it (defaultResponse()): what
 // `bake --response auto` fits. Curves that were fitted before or edited by hand are kept.
 bool hasPresetResponse(const MusclePart& part);
 

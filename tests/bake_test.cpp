@@ -99,13 +99,21 @@ TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy,
     std::ofstream(dir / "b.glb", std::ios::binary) << baked.bytes;
     Character c = loadCharacter(dir / "b.glb").character;
     const Skeleton& before = baked.loaded.character.skeleton;
-    CHECK(c.skeleton.size() == before.size() + 28);  // the skinned joints are skin joints now
+    // The skinned joints are skin joints now: 28 muscles and the armpit correctives this skeleton resolves.
+    CHECK(c.skeleton.size() == before.size() + static_cast<int>(baked.bake.muscles.parts.size()));
+    CHECK(baked.bake.muscles.parts.size() >= 28 + 6);
     for (const MusclePart& part : baked.bake.muscles.parts) {
+      INFO(part.fullName());
       int skinned = c.skeleton.find(muscleJointName(part, MuscleJointRole::kSkinned));
       REQUIRE(skinned >= 0);
-      // The skinned joint rides its carrier, one of the joints the muscle spans.
+      // The skinned joint rides its carrier: for a muscle one of the joints it spans, for a corrective
+      // its carrier landmark's joint.
       REQUIRE(part.carrier >= 0);
       CHECK(c.skeleton.names[c.skeleton.parents[skinned]] == before.names[part.carrier]);
+      if (part.kind == PartKind::kCorrective) {
+        CHECK(part.carrier == baked.landmarks.get(part.carrier_landmark).joint);
+        continue;
+      }
       const std::vector<int> spanned = spannedJoints(before, part);
       CHECK(std::find(spanned.begin(), spanned.end(), part.carrier) != spanned.end());
     }
@@ -143,7 +151,7 @@ TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy,
       const std::string& name = reloaded.skeleton.names[track.joint];
       tracks += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
     }
-    CHECK(tracks == 28 * 3);
+    CHECK(tracks == 38 * 3);  // 28 muscles and 10 armpit corrective parts
   }
 }
 
@@ -230,11 +238,69 @@ TEST_CASE("bake: the muscles' share of the weights comes from the joints they sp
     if (baked.path.find("RobotExpressive") == std::string::npos) {
       for (size_t m = 0; m < muscle_weight.size(); ++m) {
         INFO(baked.muscles.parts[m].fullName());
-        CHECK(muscle_weight[m] > 0.002);
+        // A corrective has skin only where its carrier's weight blends across its span (the next test).
+        if (baked.muscles.parts[m].kind == PartKind::kMuscle) CHECK(muscle_weight[m] > 0.002);
       }
       std::vector<double> sorted = muscle_weight;
       std::sort(sorted.begin(), sorted.end());
       CHECK(sorted[sorted.size() / 2] > 1.0);
+    }
+  }
+}
+
+TEST_CASE("bake: a corrective takes weight from its carrier only, where the skin blends the two sides of its span") {
+  // Plain skinning stretches a web only where it blends joints that move apart; skin one side holds
+  // alone moves rigidly and needs no correcting. KayKit's rigid segments and RobotExpressive's
+  // hands-only skin blend nowhere at the armpit, and give the correctives no skin at all.
+  for (const BakedCharacter& baked : bakedAtTen()) {
+    INFO(baked.path);
+    const Skeleton& skeleton = baked.loaded.character.skeleton;
+    const MuscleSet& muscles = baked.bake.muscles;
+    const int muscle_count = static_cast<int>(muscles.parts.size());
+    std::vector<double> total(muscle_count, 0.0);
+    for (const BakedPart& part : baked.bake.parts) {
+      const MeshPart& mesh = baked.loaded.character.meshes[part.mesh_part];
+      const InfluenceSet input = normalizedInfluences(influencesFromMesh(mesh));
+      const InfluenceSet& full = part.full;
+      for (int v = 0; v < full.vertexCount(); ++v) {
+        for (int k = 0; k < full.slots_per_vertex; ++k) {
+          const int m = full.joints[v * full.slots_per_vertex + k] - skeleton.size();
+          const double weight = full.weights[v * full.slots_per_vertex + k];
+          if (m < 0 || weight <= 0.0 || muscles.parts[m].kind != PartKind::kCorrective) continue;
+          double carrier = 0.0, insertion_side = 0.0;
+          for (int i = 0; i < input.slots_per_vertex; ++i) {
+            const int joint = input.joints[v * input.slots_per_vertex + i];
+            const double w = input.weights[v * input.slots_per_vertex + i];
+            if (joint == muscles.parts[m].carrier) carrier += w;
+            for (int a = joint; a >= 0; a = skeleton.parents[a]) {
+              if (a == muscles.parts[m].insertion.joint) {
+                insertion_side += w;
+                break;
+              }
+            }
+          }
+          INFO(muscles.parts[m].fullName() << " at vertex " << v << ": weight " << weight << ", carrier's " << carrier
+                                           << ", insertion side's " << insertion_side);
+          CHECK(weight <= carrier + 1e-12);  // taken from the carrier, nothing else
+          CHECK(insertion_side > 0.0);       // on skin the input blends across the span
+          CHECK(insertion_side < 1.0);
+          total[m] += weight;
+        }
+      }
+    }
+    const bool blends = baked.path.find("KayKit") == std::string::npos && baked.path.find("RobotExpressive") == std::string::npos;
+    for (int m = 0; m < muscle_count; ++m) {
+      INFO(muscles.parts[m].fullName());
+      if (muscles.parts[m].kind == PartKind::kCorrective && !blends) CHECK(total[m] == 0.0);
+    }
+    if (!blends) continue;
+    // The arm's own corrective has skin on every character whose armpit blends.
+    for (const char* side : {"Left", "Right"}) {
+      double arm = 0.0;
+      for (int m = 0; m < muscle_count; ++m)
+        if (muscles.parts[m].fullName() == std::string(side) + "AxillaUpperArm") arm = total[m];
+      INFO(side);
+      CHECK(arm > 1.0);
     }
   }
 }

@@ -62,11 +62,18 @@ def main(repo: pathlib.Path, cli: str = "") -> int:
     broken_rom["clips"][0]["to_degs"] = 130
     sided_rom = copy.deepcopy(rom)
     sided_rom["clips"][0]["joints"][0]["landmark"] = "forearm_l"
+    corrective = next(m for m in preset["muscles"] if m.get("kind") == "corrective")
+    carrierless = copy.deepcopy(preset)
+    next(m for m in carrierless["muscles"] if m.get("kind") == "corrective").pop("carriers")
+    carrying_muscle = copy.deepcopy(preset)
+    carrying_muscle["muscles"][0]["carriers"] = list(corrective["carriers"])
     manifest = json.loads((repo / "examples" / "build_manifest.json").read_text())
     broken_manifest = copy.deepcopy(manifest)
     broken_manifest["characters"][1]["muscles"] = "tuned.json"
     negatives = [("build_manifest.schema.json", "character with both muscles and muscles_from", broken_manifest),("muscle_preset.schema.json", "typo'd key", broken_key),
                  ("muscle_preset.schema.json", "unknown landmark", broken_landmark),
+                 ("muscle_preset.schema.json", "corrective without carriers", carrierless),
+                 ("muscle_preset.schema.json", "muscle naming carriers", carrying_muscle),
                  ("jiggle_preset.schema.json", "typo'd jiggle key", broken_jiggle),
                  ("rom_preset.schema.json", "typo'd ROM clip key", broken_rom),
                  ("rom_preset.schema.json", "ROM joint with a side suffix", sided_rom)]

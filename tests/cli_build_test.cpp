@@ -116,7 +116,10 @@ TEST_CASE("cli build: every character gets its outputs and a summary, a broken o
     const nlohmann::json report = nlohmann::json::parse(slurp(folder + "/report.json"));
     CHECK(report["passed"] == true);
     CHECK(report["character"] == name + ".glb");
-    CHECK(report["character_stats"]["muscles"] == 28);
+    // 28 muscles and the armpit correctives on the joints each skeleton resolves: 10 parts on the
+    // mannequin, 6 on KayKit (its clavicle and scapula landmarks ride one joint with the chest's).
+    CHECK(report["character_stats"]["muscles"].get<int>() >= 34);
+    if (name == "hero") CHECK(report["character_stats"]["muscles"] == 38);
   }
   // No temporary file is left behind by the atomic writes.
   for (const auto& entry : fs::recursive_directory_iterator(dir.path)) {

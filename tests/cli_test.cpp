@@ -121,6 +121,28 @@ TEST_CASE("cli: bad inputs give one clear line, a stable code, an exit status an
     expectFailure(r, "PRESET_INVALID", 3, out);
     CHECK(r.err.find("typo.json#/muscles/3/compresion") != std::string::npos);
   }
+  SECTION("a corrective without carriers, and a muscle with them, name the JSON pointer") {
+    std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");
+    const std::string carriers = "\"carriers\": [\"chest\", \"spine_t12\", \"clavicle\", \"scapula\", \"upper_arm\"],";
+    size_t at = preset.find(carriers);
+    REQUIRE(at != std::string::npos);
+    std::string without = preset;
+    without.erase(at, carriers.size());
+    writeText(dir / "carrierless.json", without);
+    CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "carrierless.json") + " -o " + out);
+    expectFailure(r, "PRESET_INVALID", 3, out);
+    CHECK(r.err.find("carrierless.json#/muscles/14: missing required key 'carriers'") != std::string::npos);
+    std::string muscle = preset;
+    const std::string bicep = "\"name\": \"Bicep\",";
+    size_t b = muscle.find(bicep);
+    REQUIRE(b != std::string::npos);
+    muscle.insert(b + bicep.size(), " \"carriers\": [\"upper_arm\"],");
+    writeText(dir / "carrying.json", muscle);
+    r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "carrying.json") + " -o " + out);
+    expectFailure(r, "PRESET_INVALID", 3, out);
+    CHECK(r.err.find("carrying.json#/muscles/8/carriers") != std::string::npos);
+    CHECK(r.err.find("only a corrective names carriers") != std::string::npos);
+  }
   SECTION("preset that is not JSON") {
     writeText(dir / "broken.json", "{\"muscles\": [");
     CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "broken.json") + " -o " + out);

@@ -68,10 +68,11 @@ void checkMannequinTargets(const nlohmann::json& quality, double elbow_limit = -
                             << percent(body["ElbowFlexion"], "dual_quaternion") << " %");
   const double limit = elbow_limit >= 0.0 ? elbow_limit : std::abs(percent(body["ElbowFlexion"], "dual_quaternion"));
   CHECK(std::abs(percent(body["ElbowFlexion"], "rig")) <= limit);
-  // ArmRaise: the rig gains at most 0.85 of what the input skinning gains (+0.78 % -> +0.60 %; the
-  // half target is out of reach of the preset's muscles: docs/deformation-quality.md says why).
+  // ArmRaise: at most half of what the input skinning gains (+0.78 % -> +0.29 %: the muscles alone
+  // reached +0.60 %; the armpit corrective takes the web plain skinning stretches across the raised
+  // arm's armpit back; docs/deformation-quality.md).
   INFO("ArmRaise: input " << percent(body["ArmRaise"], "input") << " %, rig " << percent(body["ArmRaise"], "rig") << " %");
-  CHECK(std::abs(percent(body["ArmRaise"], "rig")) <= 0.85 * std::abs(percent(body["ArmRaise"], "input")));
+  CHECK(std::abs(percent(body["ArmRaise"], "rig")) <= 0.5 * std::abs(percent(body["ArmRaise"], "input")));
   std::string where;
   const double loss = worstRegionLoss(quality, &where);
   INFO("worst region loss beyond the input's: " << loss << " points, " << where);
@@ -133,11 +134,26 @@ TEST_CASE("deformation quality: the compressed biceps bulges out by the order of
   // The left and right twins move the skin alike (the sample is an exact mirror image).
   CHECK(muscles["LeftBicep"]["compressed"]["mean_mm"].get<double>() ==
         Approx(muscles["RightBicep"]["compressed"]["mean_mm"].get<double>()).margin(0.05));
+  int correctives = 0;
   for (const auto& [name, figures] : muscles.items()) {
     INFO(name);
+    if (figures["kind"] == "corrective") {
+      // The armpit corrective is no muscle: it draws the armpit's skin in as the arm rises (ArmRaise
+      // stretches its span), where plain skinning stretches a web across the opening corner.
+      ++correctives;
+      CHECK(name.find("Axilla") != std::string::npos);
+      // The mannequin's scapula joint holds no skin the arm blends: that part drives none.
+      if (name.find("Scapula") != std::string::npos) continue;
+      REQUIRE(figures["stretched"].is_object());
+      CHECK(figures["stretched"]["clip"] == "ArmRaise");
+      CHECK(figures["stretched"]["mean_mm"].get<double>() < -1.0);
+      continue;
+    }
+    CHECK(figures["kind"] == "muscle");
     if (figures["stretched"].is_object()) CHECK(figures["stretched"]["mean_mm"].get<double>() >= -0.001 * height_mm);
     if (figures["compressed"].is_object()) CHECK(figures["compressed"]["mean_mm"].get<double>() >= -0.0005 * height_mm);
   }
+  CHECK(correctives == 10);
 }
 
 TEST_CASE("deformation quality: with gow_fullbody no region of a shared character loses more than 1 point beyond its skinning") {

@@ -23,6 +23,9 @@ void expectSameMuscles(const MuscleSet& a, const MuscleSet& b, double tolerance)
     CHECK(a.parts[i].compression == b.parts[i].compression);
     CHECK(a.parts[i].stretch == b.parts[i].stretch);
     CHECK((a.parts[i].bulge - b.parts[i].bulge).norm() <= tolerance);
+    CHECK(a.parts[i].kind == b.parts[i].kind);
+    CHECK(a.parts[i].carrier_landmark == b.parts[i].carrier_landmark);
+    CHECK(a.parts[i].carrier == b.parts[i].carrier);
   }
 }
 }  // namespace
@@ -44,7 +47,35 @@ TEST_CASE("muscle JSON round-trips through the rigbake block on every character"
     CHECK(json["Arms"]["Left"].contains("LeftBicep_muscleOrigin"));
     CHECK(json["Trapezius"]["Right"].contains("RightTrapeziusC_muscleDriver"));
     CHECK(json["rigbake"]["units"] == "m");
+    // Muscles are written as they always were; a corrective says what it is and what carries it.
+    CHECK_FALSE(json["rigbake"]["muscles"]["LeftBicep"].contains("kind"));
+    CHECK(json["rigbake"]["muscles"]["LeftAxillaUpperArm"]["kind"] == "corrective");
+    CHECK(json["rigbake"]["muscles"]["RightAxillaUpperArm"]["carrier_landmark"] == "upper_arm_r");
+    CHECK(json["Axilla"]["Left"].contains("LeftAxillaChest_muscleOrigin"));
   }
+}
+
+TEST_CASE("a corrective whose carrier landmark the character does not resolve is refused with MUSCLES_MISMATCH") {
+  test::TempDir dir;
+  test::Resolved r = test::resolveShipped(test::sampleGlbPath());
+  MuscleSet placed = placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth);
+  nlohmann::json json = nlohmann::json::parse(muscleJson(placed, r.character.skeleton, "gow_biped"));
+  json["rigbake"]["muscles"]["LeftAxillaChest"]["carrier_landmark"] = "toe_tip_l";
+  std::ofstream(dir / "m.json") << json.dump(2);
+  try {
+    readMuscleJson(dir / "m.json", r.character, r.landmarks, test::gowPreset());
+    FAIL("expected MUSCLES_MISMATCH");
+  } catch (const Error& error) {
+    CHECK(error.code() == "MUSCLES_MISMATCH");
+    CHECK(std::string(error.what()).find("m.json#/rigbake/muscles/LeftAxillaChest/carrier_landmark") != std::string::npos);
+    CHECK(std::string(error.what()).find("toe_tip_l") != std::string::npos);
+  }
+}
+
+TEST_CASE("correctives are named by their carrier landmark") {
+  CHECK(correctivePartName("Axilla", "upper_arm") == "AxillaUpperArm");
+  CHECK(correctivePartName("Axilla", "spine_t12") == "AxillaSpineT12");
+  CHECK(correctivePartName("Axilla", "chest") == "AxillaChest");
 }
 
 TEST_CASE("the talk's positions-only export is read, with attach joints from the preset") {

@@ -177,12 +177,33 @@ TEST_CASE("no two spine landmarks coincide on any character") {
 
 TEST_CASE("placed locators sit within 8% of body height of the surface and on their own side") {
   const MusclePreset& preset = test::gowPreset();
-  REQUIRE(preset.parts.size() == 14);
+  // The talk's 14 muscles and the armpit corrective (one part per carrier the skeleton resolves).
+  REQUIRE(preset.parts.size() == 15);
   for (const std::string& path : allCharacterPaths()) {
     INFO(path);
     test::Resolved r = test::resolveShipped(path);
     MuscleSet muscles = placeMuscles(r.character, r.landmarks, preset, Sides::kBoth);
-    REQUIRE(muscles.parts.size() == 28);
+    int muscle_parts = 0, corrective_parts = 0;
+    for (const MusclePart& part : muscles.parts) {
+      INFO(part.fullName());
+      if (part.kind == PartKind::kMuscle) {
+        ++muscle_parts;
+        CHECK(part.carrier < 0);  // chosen by the bake from the weights
+        continue;
+      }
+      ++corrective_parts;
+      REQUIRE(r.landmarks.has(part.carrier_landmark));
+      CHECK(part.carrier == r.landmarks.get(part.carrier_landmark).joint);
+      // A sided carrier is on the part's own side (clavicle_l for the left); a central one is shared.
+      const std::string suffix = part.carrier_landmark.substr(part.carrier_landmark.size() - 2);
+      if (suffix == "_l" || suffix == "_r") CHECK(suffix == (part.side == "Left" ? "_l" : "_r"));
+    }
+    REQUIRE(muscle_parts == 28);
+    // Chest, spine_t12 and the upper arm resolve on every character; clavicle and scapula may share a
+    // joint with another carrier (one part then).
+    CHECK(corrective_parts >= 6);
+    CHECK(corrective_parts <= 10);
+    CHECK(corrective_parts % 2 == 0);
     const double h = r.landmarks.body.height;
     double worst = 0.0;
     for (const MusclePart& part : muscles.parts) {
@@ -209,9 +230,17 @@ TEST_CASE("the right side is the exact mirror of the left") {
     test::Resolved r = test::resolveShipped(path);
     MuscleSet muscles = placeMuscles(r.character, r.landmarks, preset, Sides::kBoth);
     const double h = r.landmarks.body.height;
-    for (const PresetPart& spec : preset.parts) {
-      const MusclePart& left = findPart(muscles, "Left" + spec.name);
-      const MusclePart& right = findPart(muscles, "Right" + spec.name);
+    for (const MusclePart& left : muscles.parts) {
+      if (left.side != "Left") continue;
+      INFO(left.name);
+      const MusclePart& right = findPart(muscles, "Right" + left.name);
+      CHECK(right.kind == left.kind);
+      if (left.kind == PartKind::kCorrective) {
+        const std::string& l = left.carrier_landmark;
+        const bool sided = l.size() > 2 && l.compare(l.size() - 2, 2, "_l") == 0;
+        CHECK(right.carrier_landmark == (sided ? l.substr(0, l.size() - 2) + "_r" : l));
+        CHECK(right.carrier == r.landmarks.get(right.carrier_landmark).joint);
+      }
       CHECK((r.landmarks.body.mirror(right.origin.world) - left.origin.world).norm() < 1e-5 * h);
       CHECK((r.landmarks.body.mirror(right.insertion.world) - left.insertion.world).norm() < 1e-5 * h);
       CHECK((r.landmarks.body.mirror(right.driver.world) - left.driver.world).norm() < 1e-5 * h);
@@ -233,7 +262,9 @@ TEST_CASE("on the symmetric sample, placing the right side directly equals mirro
     placed[spec.name + ".origin"] = origin;
     Eigen::Vector3d insertion = evaluateFormula(spec.insertion, context);
     placed[spec.name + ".insertion"] = insertion;
-    const MusclePart& mirrored = findPart(muscles, "Right" + spec.name);
+    // A corrective's parts (one per carrier) share its locators.
+    const std::string name = spec.kind == PartKind::kMuscle ? spec.name : correctivePartName(spec.name, spec.carriers.front());
+    const MusclePart& mirrored = findPart(muscles, "Right" + name);
     worst = std::max({worst, (origin - mirrored.origin.world).norm(), (insertion - mirrored.insertion.world).norm()});
   }
   // Joint axes (trapezius A's neck Z offset) are not mirrored by a formula, but the sample's neck Z

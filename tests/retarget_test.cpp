@@ -66,15 +66,36 @@ struct Distances {
   std::string worst;
 };
 
-// Distances between the same locators of two sets with the same parts in the same order.
+// The parts of `b` in the order of `a`'s, matched by name. Every muscle must be in both; a corrective
+// may be missing from one side only, where a character lacks its carrier landmark or carries it on a
+// joint another carrier has (placement and retarget then make no part), and is then left out.
+std::vector<std::pair<const MusclePart*, const MusclePart*>> matchedParts(const MuscleSet& a, const MuscleSet& b) {
+  std::vector<std::pair<const MusclePart*, const MusclePart*>> pairs;
+  auto find = [](const MuscleSet& set, const std::string& name) -> const MusclePart* {
+    for (const MusclePart& part : set.parts)
+      if (part.fullName() == name) return &part;
+    return nullptr;
+  };
+  for (const MusclePart& part : a.parts) {
+    const MusclePart* other = find(b, part.fullName());
+    INFO(part.fullName());
+    if (!other) REQUIRE(part.kind == PartKind::kCorrective);
+    if (other) pairs.emplace_back(&part, other);
+  }
+  for (const MusclePart& part : b.parts) {
+    INFO(part.fullName());
+    if (!find(a, part.fullName())) REQUIRE(part.kind == PartKind::kCorrective);
+  }
+  return pairs;
+}
+
+// Distances between the same locators of two sets, parts matched by name.
 Distances locatorDistances(const MuscleSet& a, const MuscleSet& b) {
-  REQUIRE(a.parts.size() == b.parts.size());
   Distances d;
   int count = 0;
-  for (size_t i = 0; i < a.parts.size(); ++i) {
-    REQUIRE(a.parts[i].fullName() == b.parts[i].fullName());
-    const MuscleLocator* la[3] = {&a.parts[i].origin, &a.parts[i].insertion, &a.parts[i].driver};
-    const MuscleLocator* lb[3] = {&b.parts[i].origin, &b.parts[i].insertion, &b.parts[i].driver};
+  for (const auto& [pa, pb] : matchedParts(a, b)) {
+    const MuscleLocator* la[3] = {&pa->origin, &pa->insertion, &pa->driver};
+    const MuscleLocator* lb[3] = {&pb->origin, &pb->insertion, &pb->driver};
     const char* which[3] = {"origin", "insertion", "driver"};
     for (int k = 0; k < 3; ++k) {
       double distance = (la[k]->world - lb[k]->world).norm();
@@ -82,7 +103,7 @@ Distances locatorDistances(const MuscleSet& a, const MuscleSet& b) {
       ++count;
       if (distance > d.max) {
         d.max = distance;
-        d.worst = a.parts[i].fullName() + "." + which[k];
+        d.worst = pa->fullName() + "." + which[k];
       }
     }
   }
@@ -91,9 +112,9 @@ Distances locatorDistances(const MuscleSet& a, const MuscleSet& b) {
 }
 
 bool sameAttachJoints(const MuscleSet& a, const MuscleSet& b) {
-  for (size_t i = 0; i < a.parts.size(); ++i) {
-    if (a.parts[i].origin.joint != b.parts[i].origin.joint || a.parts[i].insertion.joint != b.parts[i].insertion.joint ||
-        a.parts[i].driver.joint != b.parts[i].driver.joint)
+  for (const auto& [pa, pb] : matchedParts(a, b)) {
+    if (pa->origin.joint != pb->origin.joint || pa->insertion.joint != pb->insertion.joint || pa->driver.joint != pb->driver.joint ||
+        pa->carrier != pb->carrier)
       return false;
   }
   return true;
@@ -139,9 +160,9 @@ TEST_CASE("retargeting the preset placement lands near the direct placement for 
       CHECK(round_trip.max <= 1e-4 * height_a);
       CHECK(sameAttachJoints(back, a.muscles));
       // Lengths on the body scale with it.
-      for (size_t i = 0; i < moved.parts.size(); ++i) {
-        CHECK(moved.parts[i].bulge.isApprox(b.muscles.parts[i].bulge, 1e-9));
-        CHECK(moved.parts[i].compression == a.muscles.parts[i].compression);
+      for (const auto& [pm, pb] : matchedParts(moved, b.muscles)) {
+        CHECK(pm->bulge.isApprox(pb->bulge, 1e-9));
+        CHECK(pm->compression == pb->compression);
       }
       CHECK(moved.body_height == height_b);
     }
@@ -324,7 +345,12 @@ TEST_CASE("cli: retarget writes byte-identical JSON and reports each locator's f
   CHECK(test::slurp(dir / "a.json") == test::slurp(dir / "b.json"));
   nlohmann::json summary = nlohmann::json::parse(first.out);
   CHECK(summary["to"] == "Quaternius_Cyberpunk_Character.glb");
-  CHECK(summary["muscle_parts"] == 28);
+  // As many parts as a placement on Cyberpunk makes: the 28 muscles and the armpit correctives whose
+  // carriers its skeleton resolves on distinct joints.
+  REQUIRE(test::runCli("place " + other + " -o " + (dir / "placed.json")).exit_code == 0);
+  const nlohmann::json placed = nlohmann::json::parse(test::slurp(dir / "placed.json"));
+  CHECK(summary["muscle_parts"] == placed["rigbake"]["muscles"].size());
+  CHECK(summary["muscle_parts"].get<int>() > 28);
   bool found_bicep_origin = false;
   for (const nlohmann::json& entry : summary["locators"]) {
     if (entry["part"] == "LeftBicep" && entry["locator"] == "origin") {
@@ -337,6 +363,11 @@ TEST_CASE("cli: retarget writes byte-identical JSON and reports each locator's f
   CHECK(found_bicep_origin);
   nlohmann::json written = nlohmann::json::parse(test::slurp(dir / "a.json"));
   CHECK(written["rigbake"]["character"] == "Quaternius_Cyberpunk_Character.glb");
+  // A corrective keeps what it is and its carrier landmark, found again on the new skeleton.
+  const nlohmann::json& armpit = written["rigbake"]["muscles"]["LeftAxillaUpperArm"];
+  CHECK(armpit["kind"] == "corrective");
+  CHECK(armpit["carrier_landmark"] == "upper_arm_l");
+  CHECK(placed["rigbake"]["muscles"]["LeftAxillaUpperArm"]["carrier_landmark"] == "upper_arm_l");
 }
 
 TEST_CASE("cli: a VRM 0.x avatar without upperChest places and retargets both ways") {
