@@ -31,6 +31,25 @@ MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector
   return locator;
 }
 
+MusclePart partFromPreset(const Skeleton& skeleton, const PresetPart& spec, const std::string& side, int origin_joint,
+                          int insertion_joint, const Eigen::Vector3d& origin, const Eigen::Vector3d& insertion,
+                          const Eigen::Vector3d& driver, double scale) {
+  MusclePart part;
+  part.group = spec.group;
+  part.name = spec.name;
+  part.side = side;
+  part.kind = spec.kind;
+  part.origin = locatorOn(skeleton, origin_joint, origin);
+  part.insertion = locatorOn(skeleton, insertion_joint, insertion);
+  part.driver = locatorOn(skeleton, origin_joint, driver);
+  part.compression = spec.compression;
+  part.stretch = spec.stretch;
+  part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
+  part.weight_radius = spec.weight_radius_ref_m * scale;
+  part.response = defaultResponse(part);
+  return part;
+}
+
 namespace {
 
 // The first attach landmark the skeleton resolves (the talk's twist joints, else the arm joints).
@@ -97,20 +116,8 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
       placed[spec.name + ".insertion"] = insertion;
       Eigen::Vector3d driver = spec.has_driver ? evaluateFormula(spec.driver, context) : (origin + insertion) / 2.0;
 
-      MusclePart part;
-      part.group = spec.group;
-      part.name = spec.name;
-      part.side = "Left";
-      part.kind = spec.kind;
-      int origin_joint = landmarks.get(origin_attach).joint;
-      part.origin = locatorOn(skeleton, origin_joint, origin);
-      part.insertion = locatorOn(skeleton, landmarks.get(insertion_attach).joint, insertion);
-      part.driver = locatorOn(skeleton, origin_joint, driver);
-      part.compression = spec.compression;
-      part.stretch = spec.stretch;
-      part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
-      part.weight_radius = spec.weight_radius_ref_m * scale;
-      part.response = defaultResponse(part);
+      const MusclePart part = partFromPreset(skeleton, spec, "Left", landmarks.get(origin_attach).joint,
+                                             landmarks.get(insertion_attach).joint, origin, insertion, driver, scale);
       // A muscle is one part; a corrective one part per carrier its skeleton resolves (a carrier whose
       // joint an earlier one has would only split that joint's weight between two equal joints).
       std::vector<MusclePart> made;

@@ -25,4 +25,12 @@ MusclePart mirrorPart(const MusclePart& left, const Skeleton& skeleton, const La
 // Re-expresses a world position in a joint's bind frame.
 MuscleLocator locatorOn(const Skeleton& skeleton, int joint, const Eigen::Vector3d& world);
 
+// A part of `spec` on `side` ("Left", "Right") with its locators at these world positions (origin and
+// driver riding `origin_joint`, the insertion `insertion_joint`), the preset's bulge and radius scaled
+// by `scale` (body height / reference height), and the response it starts with. A corrective's carrier
+// is not set here.
+MusclePart partFromPreset(const Skeleton& skeleton, const PresetPart& spec, const std::string& side, int origin_joint,
+                          int insertion_joint, const Eigen::Vector3d& origin, const Eigen::Vector3d& insertion,
+                          const Eigen::Vector3d& driver, double scale);
+
 }  // namespace rigbake

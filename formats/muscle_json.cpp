@@ -220,11 +220,14 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
           rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
                         "no attach landmark of " + full + " is resolved on " + set.character);
         };
-        MusclePart part;
-        part.group = spec.group;
+        int origin_joint = attach(spec.origin_attach);
+        Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
+        Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
+        Eigen::Vector3d driver =
+            group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
+        MusclePart part = partFromPreset(skeleton, spec, side_name, origin_joint, attach(spec.insertion_attach), origin,
+                                         insertion, driver, scale);
         part.name = part_name;
-        part.side = side_name;
-        part.kind = spec.kind;
         if (part.kind == PartKind::kCorrective) {
           part.carrier_landmark = sidedName(carrier, side);
           if (!landmarks.has(part.carrier_landmark))
@@ -232,19 +235,6 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
                           "carrier landmark '" + part.carrier_landmark + "' of " + full + " is not resolved on " + set.character);
           part.carrier = landmarks.get(part.carrier_landmark).joint;
         }
-        int origin_joint = attach(spec.origin_attach);
-        Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
-        Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
-        Eigen::Vector3d driver =
-            group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
-        part.origin = locatorOn(skeleton, origin_joint, origin);
-        part.insertion = locatorOn(skeleton, attach(spec.insertion_attach), insertion);
-        part.driver = locatorOn(skeleton, origin_joint, driver);
-        part.compression = spec.compression;
-        part.stretch = spec.stretch;
-        part.bulge = Eigen::Vector2d(spec.bulge[0], spec.bulge[1]) * scale;
-        part.weight_radius = spec.weight_radius_ref_m * scale;
-        part.response = defaultResponse(part);
         set.parts.push_back(std::move(part));
       }
     }
