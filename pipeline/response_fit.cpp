@@ -203,6 +203,11 @@ struct FitPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
   std::vector<int> welded_vertices;  // welded vertex -> its part vertex, for the pose-only pass
+  // The welded vertices whose rig weights are not the input's (a muscle's slot, or a normalization that
+  // moved a bit): only these need skinning again for the rig in the pose-only pass; the others have the
+  // input's positions to the bit (the same nonzero weights on the same joints, summed in the same order).
+  std::vector<int> rig_welded;   // welded index
+  std::vector<int> rig_vertices;  // its part vertex
   std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
   std::vector<SplitPatch> patches;    // the whole surface, then each region
   std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
@@ -236,6 +241,21 @@ std::vector<Eigen::Affine3d> skinningFrame(const Skeleton& skeleton, const Pose&
   for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
   for (size_t m = 0; m < bind_inverse.size(); ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
   return frame;
+}
+
+// Whether vertex v's nonzero weights are the same joints with the same weights, in the same order, in
+// both sets: linear blend skinning then gives the same bits from either.
+bool sameNonzeroWeights(const InfluenceSet& a, const InfluenceSet& b, int v) {
+  int i = 0, j = 0;
+  const int na = a.slots_per_vertex, nb = b.slots_per_vertex;
+  while (true) {
+    while (i < na && a.weights[v * na + i] == 0.0) ++i;
+    while (j < nb && b.weights[v * nb + j] == 0.0) ++j;
+    if (i == na || j == nb) return i == na && j == nb;
+    if (a.joints[v * na + i] != b.joints[v * nb + j] || a.weights[v * na + i] != b.weights[v * nb + j]) return false;
+    ++i;
+    ++j;
+  }
 }
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
@@ -390,6 +410,12 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     part.weights = &parts[p];
     VolumeSurface& surface = measured.surfaces[p];
     part.welded_vertices = surface.vertex_of_weld;
+    for (int w = 0; w < surface.weldedCount(); ++w) {
+      const int v = surface.vertex_of_weld[w];
+      if (sameNonzeroWeights(parts[p].input, parts[p].rig, v)) continue;
+      part.rig_welded.push_back(w);
+      part.rig_vertices.push_back(v);
+    }
     for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     const InfluenceSet& rig = parts[p].rig;
     std::vector<std::vector<MuscleVertex>> muscle_of_weld(surface.weldedCount());
@@ -499,12 +525,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     parallelForEach(threads, poses.size(), [&](size_t i) {
       const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse);
       std::vector<double> volume(region_count, 0.0);
-      std::vector<Eigen::Vector3d> welded;
+      std::vector<Eigen::Vector3d> welded, rig_only;
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
         skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.welded_vertices, &welded);
         for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.welded_vertices, &welded);
+        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.rig_vertices, &rig_only);
+        for (size_t k = 0; k < part.rig_welded.size(); ++k) welded[part.rig_welded[k]] = rig_only[k];
         for (size_t k = 0; k < patch_count; ++k) {
           const SplitPatch& split = part.patches[k];
           if (split.first_vertex < 0) continue;
