@@ -2,7 +2,6 @@
 // player (player/, docs/view.md): the muscles evaluated live by the runtime's equations in JavaScript,
 // 4, 7 or 10 influences skinned from the packed attributes, the heatmap and the jiggles' hit button.
 // Works from file:// with no server and no network.
-#include <tiny_gltf.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -50,24 +49,14 @@ std::string readPlayerBundle(const std::string& path) {
 }
 
 // What would break the player: a malformed rig extension, packed attributes that do not decode.
-void checkViewable(const std::string& path, const Character& character, const tinygltf::Model& model,
-                   const BakedFileData& file) {
+void checkViewable(const std::string& path, const BakedFileData& file) {
   if (!file.rig.problems.empty()) {
     std::string list;
     for (size_t k = 0; k < file.rig.problems.size() && k < 3; ++k) list += (k ? "; " : "") + file.rig.problems[k];
     fail("VIEW_BAKE_INVALID", path, "its RIGBAKE_muscle_rig extension cannot be evaluated: " + list);
   }
   for (const FileSkinAttributes& skin : file.skins) {
-    if (skin.mesh_part < 0 || skin.mesh_part >= static_cast<int>(character.meshes.size())) continue;
-    const int mesh = character.meshes[skin.mesh_part].gltf_mesh;
-    const int primitive = character.meshes[skin.mesh_part].gltf_primitive;
-    if (mesh < 0 || mesh >= static_cast<int>(model.meshes.size()) || primitive < 0 ||
-        primitive >= static_cast<int>(model.meshes[mesh].primitives.size()))
-      continue;
-    bool carries = false;
-    for (const auto& [semantic, accessor] : model.meshes[mesh].primitives[primitive].attributes)
-      carries |= semantic.rfind("_RIGBAKE_PACKED_", 0) == 0;
-    if (carries && !skin.has_packed)
+    if (skin.carries_packed && !skin.has_packed)
       fail("VIEW_BAKE_INVALID", path + "#" + skin.pointer,
            "its _RIGBAKE_PACKED_* attributes do not decode as docs/packed-influences.md lays them out");
   }
@@ -84,10 +73,9 @@ int run(const ViewCommandOptions& options) {
   const std::string bundle = readPlayerBundle(player_path);
   LoadedCharacter loaded = loadCharacter(options.baked);
   const BakedFileData file = readBakedFileData(loaded);
-  const tinygltf::Model& model = modelOf(*loaded.document);
-  checkViewable(options.baked, loaded.character, model, file);
+  checkViewable(options.baked, file);
   // A GLB (or VRM) goes in byte for byte; a .gltf with its buffers and images beside it becomes one GLB.
-  const std::string glb = isBinaryGltfPath(options.baked) ? readFile(options.baked) : serializeGltf(model, true);
+  const std::string glb = glbOf(options.baked, *loaded.document);
   const auto files = viewPageFiles(fileNameOf(options.baked), glb, bundle);
   writeViewDirectory(options.output, files);
 

@@ -375,6 +375,7 @@ BakedFileData readBakedFileData(const LoadedCharacter& loaded) {
     const int vertex_count = static_cast<int>(part.positions.size());
     readStandardInfluences(model, primitive, vertex_count, &skin, &data.structure);
     readPackedInfluences(model, primitive, vertex_count, &skin, &data.structure);
+    for (const auto& [semantic, accessor] : primitive.attributes) skin.carries_packed |= semantic.rfind("_RIGBAKE_PACKED_", 0) == 0;
     if (baked && !skin.has_packed && !primitive.attributes.count("_RIGBAKE_PACKED_WEIGHTS_0"))
       data.structure.push_back({skin.pointer + "/attributes", "a baked primitive has no _RIGBAKE_PACKED_* attributes"});
     if (skin.slots == 0) {

@@ -27,6 +27,7 @@
 
 #include "anatomy/error.h"
 #include "formats/atomic_file.h"
+#include "formats/gltf_document.h"
 
 namespace rigbake {
 
@@ -117,6 +118,10 @@ tinygltf::Model standAloneCopy(const tinygltf::Model& source) {
 }  // namespace
 
 bool isBinaryGltfPath(const std::string& path) { return endsWith(path, ".glb") || endsWith(path, ".vrm"); }
+
+std::string glbOf(const std::string& path, const GltfDocument& document) {
+  return isBinaryGltfPath(path) ? readFile(path) : serializeGltf(modelOf(document), true);
+}
 
 std::string serializeGltf(const tinygltf::Model& model, bool binary) {
   tinygltf::Model stand_alone = standAloneCopy(model);

@@ -13,6 +13,8 @@ class Model;
 
 namespace rigbake {
 
+struct GltfDocument;  // formats/gltf_document.h
+
 // The bytes of the file. `binary` selects GLB. Throws Error GLTF_PARSE_FAILED (with a JSON pointer)
 // when a buffer view lies outside its buffer, and INTERNAL when an image holds decoded pixels instead
 // of its encoded file bytes.
@@ -24,5 +26,9 @@ void writeGltf(const tinygltf::Model& model, const std::string& path);
 
 // True for paths that writeGltf writes as GLB.
 bool isBinaryGltfPath(const std::string& path);
+
+// A loaded file as one GLB: the file's own bytes when `path` is a GLB or VRM, else the document
+// serialized (a .gltf with its buffers and images beside it becomes one self-contained GLB).
+std::string glbOf(const std::string& path, const GltfDocument& document);
 
 }  // namespace rigbake

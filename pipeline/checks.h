@@ -89,6 +89,7 @@ struct FileSkinAttributes {
   std::vector<int> joints;      // every slot, zero-weight ones too: joints[v * slots + k]
   std::vector<double> weights;  // as decoded (normalized integers mapped to [0, 1])
   bool has_packed = false;      // the _RIGBAKE_PACKED_* carrier attributes were present and decodable
+  bool carries_packed = false;  // some _RIGBAKE_PACKED_* attribute is present, decodable or not
   PackedInfluences packed;      // skin-local indices; joint_count = skin_joint_count
 };
 
