@@ -7,6 +7,7 @@
 #include "anatomy/error.h"
 #include "formats/surface_graph.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
 
@@ -134,29 +135,71 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
 using Approximations = std::vector<std::pair<int, InfluenceSet>>;
 
 // How far `approximations` move the skin from the parts' full-precision weights at every sampled frame
-// of every clip, and where each clip's largest move is.
-DeformationFigures measureDeformation(const Character& character, const BakeResult& result,
+// of every clip, and where each clip's largest move is, from the pass's single-precision figures
+// (screened[f][p], every clip's frames in order). Each clip's largest move is recomputed in double
+// (skinningDeformationError()) on every frame whose screened figure could reach it, so the largest
+// move, its vertex and its time are the double figures; the root mean squares are the pass's.
+DeformationFigures deformationFigures(const Character& character, const BakeResult& result,
                                       const Approximations& approximations,
+                                      const std::vector<std::vector<ScreenedError>>& screened,
                                       const std::vector<std::vector<SkinFrame>>& clip_frames, int threads) {
+  // The frames whose largest move could be their clip's.
+  std::vector<std::pair<size_t, size_t>> exact;  // (frame, part), frames counted over every clip
+  std::vector<DeformationError> part_frames;     // screened[f][p], replaced by the exact figure where measured
+  const size_t part_count = approximations.size();
+  size_t first = 0;
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    const size_t frames = clip_frames[c].size();
+    double largest = -1.0, largest_bound = 0.0;
+    std::vector<double> frame_largest(frames, 0.0), frame_bound(frames, 0.0);
+    for (size_t t = 0; t < frames; ++t) {
+      for (size_t a = 0; a < part_count; ++a) {
+        const ScreenedError& figure = screened[first + t][a];
+        frame_largest[t] = std::max(frame_largest[t], figure.error.max_displacement);
+        frame_bound[t] = std::max(frame_bound[t], figure.bound);
+      }
+      if (frame_largest[t] > largest) {
+        largest = frame_largest[t];
+        largest_bound = frame_bound[t];
+      }
+    }
+    for (size_t t = 0; t < frames; ++t) {
+      if (frame_largest[t] + frame_bound[t] < largest - largest_bound) continue;
+      for (size_t a = 0; a < part_count; ++a) exact.emplace_back(first + t, a);
+    }
+    first += frames;
+  }
+  std::vector<size_t> clip_of_frame, frame_in_clip;
+  for (size_t c = 0; c < clip_frames.size(); ++c) {
+    for (size_t t = 0; t < clip_frames[c].size(); ++t) {
+      clip_of_frame.push_back(c);
+      frame_in_clip.push_back(t);
+    }
+  }
+  std::vector<DeformationError> exact_figures(exact.size());
+  parallelForEach(threads, exact.size(), [&](size_t i) {
+    const auto [f, a] = exact[i];
+    const MeshPart& mesh = character.meshes[approximations[a].first];
+    exact_figures[i] = skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second,
+                                                clip_frames[clip_of_frame[f]][frame_in_clip[f]]);
+  });
+
   DeformationFigures errors;
+  size_t next_exact = 0;
+  first = 0;
   for (size_t c = 0; c < result.clips.size(); ++c) {
     DeformationError clip_error;
     ErrorPeak peak;
-    // Every frame of the clip at once, per part; combined below in frame order, as before.
-    std::vector<std::vector<DeformationError>> part_frames;
-    for (size_t a = 0; a < approximations.size(); ++a) {
-      const MeshPart& mesh = character.meshes[approximations[a].first];
-      part_frames.push_back(
-          skinningDeformationErrors(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c], threads));
-    }
     for (size_t t = 0; t < clip_frames[c].size(); ++t) {
-      for (size_t a = 0; a < approximations.size(); ++a) {
-        const DeformationError& frame = part_frames[a][t];
+      for (size_t a = 0; a < part_count; ++a) {
+        const bool measured = next_exact < exact.size() && exact[next_exact] == std::make_pair(first + t, a);
+        const DeformationError& frame = measured ? exact_figures[next_exact++] : screened[first + t][a].error;
         if (frame.max_vertex >= 0 && frame.max_displacement > clip_error.max_displacement)
           peak = ErrorPeak{approximations[a].first, frame.max_vertex, result.clips[c].times[t]};
         clip_error = combineDeformationErrors(clip_error, frame);
       }
     }
+    first += clip_frames[c].size();
     if (peak.vertex >= 0 && clip_error.max_displacement > errors.overall.max_displacement)
       errors.peak_clip = static_cast<int>(c);
     errors.overall = combineDeformationErrors(errors.overall, clip_error);
@@ -365,31 +408,37 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   }
 
   timing.weights += lap();
-  // Deformation error of the pruned, quantized weights against the full-precision ones.
-  result.error = measureDeformation(character, result, milli, clip_frames, options.threads);
-  if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames, options.threads);
-  timing.error = lap();
-
-  if (options.measure_quality) {
-    // Measured with the weights written, as an engine skins them.
-    for (size_t a = 0; a < measured.size(); ++a) measured[a].rig = unorm16 ? fine[a].second : milli[a].second;
-    std::vector<MeasuredClip> clips;
-    for (size_t c = 0; c < result.clips.size(); ++c) {
-      MeasuredClip clip;
-      clip.name = result.clips[c].name;
-      clip.times = result.clips[c].times;
-      clip.frames = &clip_frames[c];
+  // One pass over every frame for the deformation error of the pruned, quantized weights against the
+  // full-precision ones and, measured with the weights written as an engine skins them, the volumes.
+  std::vector<std::vector<ErrorWeights>> error_weights(unorm16 ? 2 : 1);
+  for (size_t a = 0; a < measured.size(); ++a) {
+    error_weights[0].push_back(ErrorWeights{&result.parts[a].full, &milli[a].second});
+    if (unorm16) error_weights[1].push_back(ErrorWeights{&result.parts[a].full, &fine[a].second});
+    if (options.measure_quality) measured[a].rig = unorm16 ? fine[a].second : milli[a].second;
+  }
+  std::vector<MeasuredClip> clips;
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    MeasuredClip clip;
+    clip.name = result.clips[c].name;
+    clip.times = result.clips[c].times;
+    clip.frames = &clip_frames[c];
+    if (options.measure_quality) {
       for (const std::vector<double>& ratios : result.clips[c].ratio) {
         std::vector<double> clamped(ratios.size());
         for (size_t m = 0; m < ratios.size(); ++m)
           clamped[m] = std::clamp(ratios[m], rigged.parts[m].compression, rigged.parts[m].stretch);
         clip.ratio.push_back(std::move(clamped));
       }
-      clips.push_back(std::move(clip));
     }
-    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips, options.threads);
+    clips.push_back(std::move(clip));
   }
+  DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
+                                                    options.measure_quality, error_weights, options.threads);
+  if (options.measure_quality) result.quality = std::move(measures.quality);
   timing.quality = lap();
+  result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);
+  if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);
+  timing.error = lap();
   return result;
 }
 

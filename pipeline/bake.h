@@ -145,8 +145,10 @@ struct BakeTimings {
   double weights = 0.0;   // muscle weights, smoothing, pruning and rounding
   double fit = 0.0;       // fitting the muscles' response
   double pack = 0.0;      // glTF attributes and packed buffers
-  double error = 0.0;     // deformation error over every frame
-  double quality = 0.0;   // deformation-quality volumes over every frame
+  // The one pass over every frame that skins each vertex once (pipeline/deformation_quality.h
+  // measureDeformation()): the deformation-quality volumes and the deformation error in single precision.
+  double quality = 0.0;
+  double error = 0.0;     // each clip's largest deformation error, recomputed in double where it could be
 };
 
 // Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.
