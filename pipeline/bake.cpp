@@ -5,7 +5,7 @@
 #include <chrono>
 
 #include "anatomy/error.h"
-#include "formats/surface_graph.h"
+#include "pipeline/surface_graph.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
@@ -252,7 +252,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (const MeshPart& mesh : character.meshes) {
     if (!mesh.skinned || mesh.positions.empty()) continue;
     surfaces.push_back(buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3)));
-    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights));
+    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights, options.threads));
   }
   result.muscles = muscles;
   chooseCarrierJoints(character, surfaces, shares, &result.muscles);
