@@ -362,16 +362,25 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
   result.gltf_weights = options.gltf_weights;
   Approximations milli, fine;  // dequantized, skeleton indices
-  for (const MeasuredPart& weights : measured) {
+  // Every part pruned, then rounded together (they share the moments of their joints' motion).
+  std::vector<InfluenceSet> pruned_parts;
+  std::vector<MotionPart> motion_parts;
+  for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences));
+  for (size_t a = 0; a < measured.size(); ++a)
+    motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[measured[a].mesh_part].positions});
+  std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
+  for (size_t a = 0; a < measured.size(); ++a) {
+    const MeasuredPart& weights = measured[a];
     const size_t p = static_cast<size_t>(weights.mesh_part);
     const MeshPart& mesh = character.meshes[p];
     BakedPart baked;
     baked.mesh_part = weights.mesh_part;
     baked.full = weights.rig;
-    const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
-    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames, options.threads);
+    const QuantizedInfluences quantized = std::move(quantized_parts[a]);
     const QuantizedInfluences quantized_fine =
-        unorm16 ? quantizeInfluences(pruned, kUnsignedShortScale) : QuantizedInfluences{};
+        unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale) : QuantizedInfluences{};
+    InfluenceSet().joints.swap(pruned_parts[a].joints);
+    std::vector<double>().swap(pruned_parts[a].weights);
     timing.weights += lap();
     milli.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
     if (unorm16) fine.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized_fine));
