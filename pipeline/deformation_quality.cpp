@@ -47,18 +47,15 @@ class LaneSum {
     high_ = _mm_add_pd(high_, _mm_cvtps_pd(_mm_movehl_ps(block, block)));
   }
   void add(__m128 value) { addBlock(value); }
-  void addLane(int lane, double value) { extra_[static_cast<size_t>(lane)] += value; }
   std::array<double, 4> total() const {
     std::array<double, 4> out;
     _mm_storeu_pd(out.data(), low_);
     _mm_storeu_pd(out.data() + 2, high_);
-    for (size_t k = 0; k < 4; ++k) out[k] += extra_[k];
     return out;
   }
 
  private:
   __m128d low_ = _mm_setzero_pd(), high_ = _mm_setzero_pd();
-  std::array<double, 4> extra_{};
 };
 
 // A welded vertex's posed x, y and z, one skinning per lane (the fourth lane is not used).
@@ -93,47 +90,37 @@ inline __m128 tetrahedron(const PlanarPosition& a, const PlanarPosition& b, cons
 }
 
 // The caps of `patch`'s holes (pipeline/skin_volume.cpp enclosedVolumeAbout()), positions relative to
-// the sum's origin, added to `sum`. In double: a cap is large and its centre is a mean of many
-// positions, so its rounding would not average out over the few caps there are.
+// the sum's origin, added to `sum`. A cap's centre is the mean of its loop's positions taken relative to
+// the loop's first vertex (small numbers), so its rounding is relative to the hole's size: the centre
+// moves every fan triangle of a cap the same way, and a rounding relative to the positions' size would
+// not average out over the few caps there are.
 void addCaps(const ClosedPatch& patch, const Float4* planar, const PlanarPosition& origin, LaneSum* sum) {
-  alignas(16) float origin_lanes[3][4];
-  _mm_store_ps(origin_lanes[0], origin.x);
-  _mm_store_ps(origin_lanes[1], origin.y);
-  _mm_store_ps(origin_lanes[2], origin.z);
-  // Lane `s` of welded vertex w relative to the origin.
-  auto at = [&](int w, int s) {
-    const Float4* p = planar + 3 * static_cast<size_t>(w);
-    return Eigen::Vector3d(static_cast<double>(p[0].v[s]) - origin_lanes[0][s], static_cast<double>(p[1].v[s]) - origin_lanes[1][s],
-                           static_cast<double>(p[2].v[s]) - origin_lanes[2][s]);
-  };
   for (const std::vector<int>& hole : patch.holes) {
-    for (int s = 0; s < kSkinnings; ++s) {
-      Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-      for (int w : hole) centre += at(w, s);
-      centre /= static_cast<double>(hole.size());
-      double volume = 0.0;
-      for (size_t k = 0; k < hole.size(); ++k) {
-        const Eigen::Vector3d a = at(hole[k], s);
-        volume += a.dot((at(hole[(k + 1) % hole.size()], s) - a).cross(centre - a));
-      }
-      sum->addLane(s, volume);
+    const PlanarPosition first = loadPlanar(planar, hole[0]);
+    PlanarPosition offset{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
+    for (size_t k = 1; k < hole.size(); ++k) {
+      const PlanarPosition d = minus(loadPlanar(planar, hole[k]), first);
+      offset = {_mm_add_ps(offset.x, d.x), _mm_add_ps(offset.y, d.y), _mm_add_ps(offset.z, d.z)};
     }
+    const __m128 scale = _mm_set1_ps(1.0f / static_cast<float>(hole.size()));
+    offset = {_mm_mul_ps(offset.x, scale), _mm_mul_ps(offset.y, scale), _mm_mul_ps(offset.z, scale)};
+    __m128 terms = _mm_setzero_ps();
+    for (size_t k = 0; k < hole.size(); ++k) {
+      const PlanarPosition a = loadPlanar(planar, hole[k]);
+      const PlanarPosition b = loadPlanar(planar, hole[(k + 1) % hole.size()]);
+      // (a - o) . ((b - a) x (centre - a)), centre - a = (first - a) + offset.
+      const PlanarPosition u = minus(b, a), to_first = minus(first, a);
+      const PlanarPosition v{_mm_add_ps(to_first.x, offset.x), _mm_add_ps(to_first.y, offset.y), _mm_add_ps(to_first.z, offset.z)};
+      const PlanarPosition area{_mm_sub_ps(_mm_mul_ps(u.y, v.z), _mm_mul_ps(u.z, v.y)), _mm_sub_ps(_mm_mul_ps(u.z, v.x), _mm_mul_ps(u.x, v.z)),
+                                _mm_sub_ps(_mm_mul_ps(u.x, v.y), _mm_mul_ps(u.y, v.x))};
+      terms = _mm_add_ps(terms, dot(minus(a, origin), area));
+      if ((k + 1) % LaneSum::kBlock == 0) {
+        sum->addBlock(terms);
+        terms = _mm_setzero_ps();
+      }
+    }
+    sum->addBlock(terms);
   }
-}
-
-// Whether the patch's triangles and cap fans are closed (every directed edge met once each way): then
-// its volume does not depend on the point it is summed about, and it can be summed from the terms of
-// its part's whole surface. An open chain capped as it is (non-manifold) is not.
-bool isClosed(const ClosedPatch& patch) {
-  std::vector<std::pair<int, int>> edges, reversed;
-  for (const auto& t : patch.triangles)
-    for (int k = 0; k < 3; ++k) edges.emplace_back(t[k], t[(k + 1) % 3]);
-  for (const std::vector<int>& hole : patch.holes)
-    for (size_t k = 0; k < hole.size(); ++k) edges.emplace_back(hole[k], hole[(k + 1) % hole.size()]);
-  for (const auto& [a, b] : edges) reversed.emplace_back(b, a);
-  std::sort(edges.begin(), edges.end());
-  std::sort(reversed.begin(), reversed.end());
-  return edges == reversed;
 }
 
 // A muscle's skin move, summed over the parts at one frame (docs/deformation-quality.md).
@@ -145,8 +132,8 @@ struct MoveSums {
 
 struct MeasuredRegion {
   ClosedPatch patch;
-  // Summed with the whole surface's triangles (each of its triangles in no other such region, so one
-  // area vector serves both) when its patch is closed; otherwise on its own, as skin_volume.cpp sums it.
+  // Its triangles' area vectors come from the whole surface's loop (each triangle then in no other
+  // region: the preset's first rule that takes a triangle keeps it); otherwise it is summed on its own.
   bool with_whole = false;
 };
 
@@ -167,7 +154,6 @@ struct PreparedPart {
   std::vector<int> welded_of_lane;  // kSkinLanes per group: the welded vertex, -1: measured for the error only
   // Per part vertex: the lane (kSkinLanes * group + lane) that skins it, or an exact copy of it.
   std::vector<std::uint32_t> lane_of_vertex;
-  bool whole_closed = false;  // the whole surface encloses a volume about any point
   int approximations = 0;
   // Per approximation, for the error's rounding bound: max over vertices of (|p - c| + 1) sum_k |w_k|,
   // and the most joints a vertex's difference of weights has.
@@ -251,8 +237,8 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
         const size_t r = kept[k];
         MeasuredRegion region;
         region.patch = std::move(measured.regions[p][r]);
-        region.with_whole = isClosed(region.patch);
-        if (region.with_whole && p < regions[r].triangles.size()) {
+        region.with_whole = true;
+        if (p < regions[r].triangles.size()) {
           for (int t : regions[r].triangles[p]) {
             const int i = whole_of_part[t];
             if (i < 0) continue;
@@ -351,7 +337,6 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       for (size_t v = 0; v < positions.size(); ++v) part.lane_of_vertex[v] = lane_of_skinned[static_cast<size_t>(skinned_as[v])];
     }
     if (quality) {
-      part.whole_closed = isClosed(surface.whole);
       std::vector<size_t> order(surface.whole.triangles.size());
       std::iota(order.begin(), order.end(), 0);
       std::stable_sort(order.begin(), order.end(),
@@ -520,13 +505,12 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       }
       if (!quality) continue;
 
-      // Volumes: the whole surface about the centre when it is closed (else about its first vertex, as
-      // skin_volume.cpp sums it); each region about its own first vertex, so its terms are the size
-      // of the region, not of the body, a closed one from the whole surface's area vectors.
+      // Volumes: the whole surface about its first vertex, each region about its own (so a region's
+      // terms are the size of the region, not of the body), as skin_volume.cpp sums them; a triangle's
+      // area vector serves the body and its region.
       const ClosedPatch& whole = part.surface.whole;
       const PlanarPosition zero{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
-      const PlanarPosition whole_origin =
-          part.whole_closed || whole.triangles.empty() ? zero : loadPlanar(planar, whole.triangles[0][0]);
+      const PlanarPosition whole_origin = whole.triangles.empty() ? zero : loadPlanar(planar, whole.triangles[0][0]);
       scratch.region_origin.resize(region_count);
       scratch.region_sum.assign(region_count, LaneSum());
       for (size_t r = 0; r < region_count; ++r) {
