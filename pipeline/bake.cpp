@@ -1,6 +1,7 @@
 #include "pipeline/bake.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <chrono>
 
@@ -63,8 +64,8 @@ std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
 
 namespace {
 
-constexpr MuscleJointRole kRoles[] = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
-                                      MuscleJointRole::kSkinned};
+constexpr std::array<MuscleJointRole, 4> kRoles = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
+                                                  MuscleJointRole::kSkinned};
 
 // Base and driver ride the origin attach joint, the tip the insertion joint (the talk's attachments);
 // the skinned joint rides its carrier, the joint whose skin weight it takes.
@@ -122,7 +123,7 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
     const int joint = result.skinned_joint_of_muscle[setup.muscle];
     const MusclePart& part = muscles.parts[setup.muscle];
     for (size_t t = 0; t < baked->times.size(); ++t) {
-      baked->local[t][joint] = track.local[t];
+      if (!baked->local.empty()) baked->local[t][joint] = track.local[t];
       const Eigen::Affine3d world = poses[t].world[parentOf(part, MuscleJointRole::kSkinned)] * track.local[t].matrix();
       (*frames)[t][skeleton.size() + setup.muscle] = world * result.joints[joint].bind_world.inverse();
     }
@@ -132,7 +133,7 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
 }
 
 // Per skinned mesh part (index into Character::meshes), its rounded weights with skeleton indices.
-using Approximations = std::vector<std::pair<int, InfluenceSet>>;
+using Approximations = std::vector<std::pair<int, const InfluenceSet*>>;
 
 // How far `approximations` move the skin from the parts' full-precision weights at every sampled frame
 // of every clip, and where each clip's largest move is, from the pass's single-precision figures
@@ -180,7 +181,7 @@ DeformationFigures deformationFigures(const Character& character, const BakeResu
   parallelForEach(threads, exact.size(), [&](size_t i) {
     const auto [f, a] = exact[i];
     const MeshPart& mesh = character.meshes[approximations[a].first];
-    exact_figures[i] = skinningDeformationError(mesh.positions, result.parts[a].full, approximations[a].second,
+    exact_figures[i] = skinningDeformationError(mesh.positions, result.parts[a].full, *approximations[a].second,
                                                 clip_frames[clip_of_frame[f]][frame_in_clip[f]]);
   });
 
@@ -321,8 +322,15 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       result.joints.push_back(joint);
     }
   }
-  // Clips: every baked joint's local TRS, every muscle's length ratio, and the skin matrices of every
-  // sampled frame (for the rounding of the weights and for the deformation error).
+  // Clips: every baked joint's local TRS (only written as channels when the motion is sampled),
+  // every muscle's length ratio, and the skin matrices of every sampled frame (for the rounding of the
+  // weights and for the deformation error). The inverse bind matrices are formed once (the same
+  // products as skinMatrix() forms per frame).
+  const bool sampled = options.motion != MuscleMotion::kRuntime;
+  std::vector<Eigen::Affine3d> inverse_bind(static_cast<size_t>(skeleton.size()));
+  for (int j = 0; j < skeleton.size(); ++j) inverse_bind[j] = skeleton.bind_world[j].inverse();
+  std::vector<Eigen::Affine3d> inverse_muscle_bind(static_cast<size_t>(muscle_count));
+  for (int m = 0; m < muscle_count; ++m) inverse_muscle_bind[m] = result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
   std::vector<std::vector<SkinFrame>> clip_frames;
   for (const Clip& clip : character.clips) {
     BakedClip baked;
@@ -336,17 +344,22 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       const Pose pose = sampleClip(skeleton, clip, time);
       if (!options.jiggles.empty()) poses.push_back(pose);
       const RigEvaluation evaluation = evaluateRig(rig, pose, true);
-      std::vector<Trs> locals;
       std::vector<double> ratios;
       SkinFrame skin(skeleton.size() + muscle_count);
-      for (int j = 0; j < skeleton.size(); ++j) skin[j] = skinMatrix(pose, skeleton, j);
+      for (int j = 0; j < skeleton.size(); ++j) skin[j] = pose.world[j] * inverse_bind[j];
       for (int m = 0; m < muscle_count; ++m) {
-        const MusclePart& part = rigged.parts[m];
-        for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(evaluation, m, role), pose, parentOf(part, role)));
         ratios.push_back(evaluation.drivers[m].ratio);
-        skin[skeleton.size() + m] = matrixAt(evaluation.skinned, m) * result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
+        skin[skeleton.size() + m] = matrixAt(evaluation.skinned, m) * inverse_muscle_bind[m];
       }
-      baked.local.push_back(std::move(locals));
+      if (sampled) {
+        std::vector<Trs> locals;
+        locals.reserve(kRoles.size() * static_cast<size_t>(muscle_count));
+        for (int m = 0; m < muscle_count; ++m) {
+          const MusclePart& part = rigged.parts[m];
+          for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(evaluation, m, role), pose, parentOf(part, role)));
+        }
+        baked.local.push_back(std::move(locals));
+      }
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
@@ -361,7 +374,11 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // Weights per skinned part.
   const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
   result.gltf_weights = options.gltf_weights;
-  Approximations milli, fine;  // dequantized, skeleton indices
+  // Dequantized, skeleton indices. The weights an engine skins with (the milli ones, or with
+  // GltfWeights::kUnorm16 the fine ones) take the place of the full weights in `measured`, which the
+  // volumes are measured with; the full weights move into the result.
+  Approximations milli, fine;
+  std::vector<InfluenceSet> milli_beside(unorm16 ? measured.size() : 0);
   // Every part pruned, then rounded together (they share the moments of their joints' motion).
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
@@ -372,18 +389,26 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (size_t a = 0; a < measured.size(); ++a) {
     const MeasuredPart& weights = measured[a];
     const size_t p = static_cast<size_t>(weights.mesh_part);
+    // (The fit is done: `measured` now changes to what the volumes are measured with.)
     const MeshPart& mesh = character.meshes[p];
     BakedPart baked;
     baked.mesh_part = weights.mesh_part;
-    baked.full = weights.rig;
-    const QuantizedInfluences quantized = std::move(quantized_parts[a]);
+    baked.full = std::move(measured[a].rig);
+    QuantizedInfluences quantized = std::move(quantized_parts[a]);
     const QuantizedInfluences quantized_fine =
         unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale) : QuantizedInfluences{};
     InfluenceSet().joints.swap(pruned_parts[a].joints);
     std::vector<double>().swap(pruned_parts[a].weights);
     timing.weights += lap();
-    milli.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
-    if (unorm16) fine.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized_fine));
+    if (unorm16) {
+      milli_beside[a] = dequantizeInfluences(quantized);
+      measured[a].rig = dequantizeInfluences(quantized_fine);
+      milli.emplace_back(static_cast<int>(p), &milli_beside[a]);
+      fine.emplace_back(static_cast<int>(p), &measured[a].rig);
+    } else {
+      measured[a].rig = dequantizeInfluences(quantized);
+      milli.emplace_back(static_cast<int>(p), &measured[a].rig);
+    }
 
     // Skin-local indices: the file's joint list, then the muscles' skinned joints.
     baked.skin_joints = mesh.skin_joints;
@@ -405,7 +430,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       }
       return influences;
     };
-    baked.quantized = skinLocal(quantized);
+    baked.quantized = skinLocal(std::move(quantized));
     const int skin_size = static_cast<int>(baked.skin_joints.size());
     baked.standard = standardSkinAttributes(unorm16 ? skinLocal(quantized_fine) : baked.quantized, skin_size,
                                             WeightStorage::kUnsignedShort);
@@ -421,9 +446,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // full-precision ones and, measured with the weights written as an engine skins them, the volumes.
   std::vector<std::vector<ErrorWeights>> error_weights(unorm16 ? 2 : 1);
   for (size_t a = 0; a < measured.size(); ++a) {
-    error_weights[0].push_back(ErrorWeights{&result.parts[a].full, &milli[a].second});
-    if (unorm16) error_weights[1].push_back(ErrorWeights{&result.parts[a].full, &fine[a].second});
-    if (options.measure_quality) measured[a].rig = unorm16 ? fine[a].second : milli[a].second;
+    error_weights[0].push_back(ErrorWeights{&result.parts[a].full, milli[a].second});
+    if (unorm16) error_weights[1].push_back(ErrorWeights{&result.parts[a].full, fine[a].second});
   }
   std::vector<MeasuredClip> clips;
   for (size_t c = 0; c < result.clips.size(); ++c) {

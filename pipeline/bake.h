@@ -97,7 +97,8 @@ struct BakedClip {
   bool measure_only = false;  // Clip::measure_only: measured on (weights, errors), not written
   std::string name;
   std::vector<double> times;
-  // local[t][k]: TRS of baked joint k (relative to its parent) at times[t].
+  // local[t][k]: TRS of baked joint k (relative to its parent) at times[t]; empty when the motion is
+  // MuscleMotion::kRuntime, whose file has no channels for the muscle joints.
   std::vector<std::vector<Trs>> local;
   // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
   std::vector<std::vector<double>> ratio;
