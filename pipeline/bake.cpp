@@ -1,12 +1,14 @@
 #include "pipeline/bake.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <chrono>
 
 #include "anatomy/error.h"
-#include "formats/surface_graph.h"
+#include "pipeline/surface_graph.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
 
@@ -62,8 +64,8 @@ std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
 
 namespace {
 
-constexpr MuscleJointRole kRoles[] = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
-                                      MuscleJointRole::kSkinned};
+constexpr std::array<MuscleJointRole, 4> kRoles = {MuscleJointRole::kBase, MuscleJointRole::kTip, MuscleJointRole::kDriver,
+                                                  MuscleJointRole::kSkinned};
 
 // Base and driver ride the origin attach joint, the tip the insertion joint (the talk's attachments);
 // the skinned joint rides its carrier, the joint whose skin weight it takes.
@@ -121,7 +123,7 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
     const int joint = result.skinned_joint_of_muscle[setup.muscle];
     const MusclePart& part = muscles.parts[setup.muscle];
     for (size_t t = 0; t < baked->times.size(); ++t) {
-      baked->local[t][joint] = track.local[t];
+      if (!baked->local.empty()) baked->local[t][joint] = track.local[t];
       const Eigen::Affine3d world = poses[t].world[parentOf(part, MuscleJointRole::kSkinned)] * track.local[t].matrix();
       (*frames)[t][skeleton.size() + setup.muscle] = world * result.joints[joint].bind_world.inverse();
     }
@@ -131,32 +133,74 @@ std::vector<JiggleTrack> bakeJiggles(const Skeleton& skeleton, const MuscleSet& 
 }
 
 // Per skinned mesh part (index into Character::meshes), its rounded weights with skeleton indices.
-using Approximations = std::vector<std::pair<int, InfluenceSet>>;
+using Approximations = std::vector<std::pair<int, const InfluenceSet*>>;
 
 // How far `approximations` move the skin from the parts' full-precision weights at every sampled frame
-// of every clip, and where each clip's largest move is.
-DeformationFigures measureDeformation(const Character& character, const BakeResult& result,
+// of every clip, and where each clip's largest move is, from the pass's single-precision figures
+// (screened[f][p], every clip's frames in order). Each clip's largest move is recomputed in double
+// (skinningDeformationError()) on every frame whose screened figure could reach it, so the largest
+// move, its vertex and its time are the double figures; the root mean squares are the pass's.
+DeformationFigures deformationFigures(const Character& character, const BakeResult& result,
                                       const Approximations& approximations,
+                                      const std::vector<std::vector<ScreenedError>>& screened,
                                       const std::vector<std::vector<SkinFrame>>& clip_frames, int threads) {
+  // The frames whose largest move could be their clip's.
+  std::vector<std::pair<size_t, size_t>> exact;  // (frame, part), frames counted over every clip
+  std::vector<DeformationError> part_frames;     // screened[f][p], replaced by the exact figure where measured
+  const size_t part_count = approximations.size();
+  size_t first = 0;
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    const size_t frames = clip_frames[c].size();
+    double largest = -1.0, largest_bound = 0.0;
+    std::vector<double> frame_largest(frames, 0.0), frame_bound(frames, 0.0);
+    for (size_t t = 0; t < frames; ++t) {
+      for (size_t a = 0; a < part_count; ++a) {
+        const ScreenedError& figure = screened[first + t][a];
+        frame_largest[t] = std::max(frame_largest[t], figure.error.max_displacement);
+        frame_bound[t] = std::max(frame_bound[t], figure.bound);
+      }
+      if (frame_largest[t] > largest) {
+        largest = frame_largest[t];
+        largest_bound = frame_bound[t];
+      }
+    }
+    for (size_t t = 0; t < frames; ++t) {
+      if (frame_largest[t] + frame_bound[t] < largest - largest_bound) continue;
+      for (size_t a = 0; a < part_count; ++a) exact.emplace_back(first + t, a);
+    }
+    first += frames;
+  }
+  std::vector<size_t> clip_of_frame, frame_in_clip;
+  for (size_t c = 0; c < clip_frames.size(); ++c) {
+    for (size_t t = 0; t < clip_frames[c].size(); ++t) {
+      clip_of_frame.push_back(c);
+      frame_in_clip.push_back(t);
+    }
+  }
+  std::vector<DeformationError> exact_figures(exact.size());
+  parallelForEach(threads, exact.size(), [&](size_t i) {
+    const auto [f, a] = exact[i];
+    const MeshPart& mesh = character.meshes[approximations[a].first];
+    exact_figures[i] = skinningDeformationError(mesh.positions, result.parts[a].full, *approximations[a].second,
+                                                clip_frames[clip_of_frame[f]][frame_in_clip[f]]);
+  });
+
   DeformationFigures errors;
+  size_t next_exact = 0;
+  first = 0;
   for (size_t c = 0; c < result.clips.size(); ++c) {
     DeformationError clip_error;
     ErrorPeak peak;
-    // Every frame of the clip at once, per part; combined below in frame order, as before.
-    std::vector<std::vector<DeformationError>> part_frames;
-    for (size_t a = 0; a < approximations.size(); ++a) {
-      const MeshPart& mesh = character.meshes[approximations[a].first];
-      part_frames.push_back(
-          skinningDeformationErrors(mesh.positions, result.parts[a].full, approximations[a].second, clip_frames[c], threads));
-    }
     for (size_t t = 0; t < clip_frames[c].size(); ++t) {
-      for (size_t a = 0; a < approximations.size(); ++a) {
-        const DeformationError& frame = part_frames[a][t];
+      for (size_t a = 0; a < part_count; ++a) {
+        const bool measured = next_exact < exact.size() && exact[next_exact] == std::make_pair(first + t, a);
+        const DeformationError& frame = measured ? exact_figures[next_exact++] : screened[first + t][a].error;
         if (frame.max_vertex >= 0 && frame.max_displacement > clip_error.max_displacement)
           peak = ErrorPeak{approximations[a].first, frame.max_vertex, result.clips[c].times[t]};
         clip_error = combineDeformationErrors(clip_error, frame);
       }
     }
+    first += clip_frames[c].size();
     if (peak.vertex >= 0 && clip_error.max_displacement > errors.overall.max_displacement)
       errors.peak_clip = static_cast<int>(c);
     errors.overall = combineDeformationErrors(errors.overall, clip_error);
@@ -209,7 +253,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (const MeshPart& mesh : character.meshes) {
     if (!mesh.skinned || mesh.positions.empty()) continue;
     surfaces.push_back(buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3)));
-    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights));
+    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights, options.threads));
   }
   result.muscles = muscles;
   chooseCarrierJoints(character, surfaces, shares, &result.muscles);
@@ -278,8 +322,15 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       result.joints.push_back(joint);
     }
   }
-  // Clips: every baked joint's local TRS, every muscle's length ratio, and the skin matrices of every
-  // sampled frame (for the rounding of the weights and for the deformation error).
+  // Clips: every baked joint's local TRS (only written as channels when the motion is sampled),
+  // every muscle's length ratio, and the skin matrices of every sampled frame (for the rounding of the
+  // weights and for the deformation error). The inverse bind matrices are formed once (the same
+  // products as skinMatrix() forms per frame).
+  const bool sampled = options.motion != MuscleMotion::kRuntime;
+  std::vector<Eigen::Affine3d> inverse_bind(static_cast<size_t>(skeleton.size()));
+  for (int j = 0; j < skeleton.size(); ++j) inverse_bind[j] = skeleton.bind_world[j].inverse();
+  std::vector<Eigen::Affine3d> inverse_muscle_bind(static_cast<size_t>(muscle_count));
+  for (int m = 0; m < muscle_count; ++m) inverse_muscle_bind[m] = result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
   std::vector<std::vector<SkinFrame>> clip_frames;
   for (const Clip& clip : character.clips) {
     BakedClip baked;
@@ -293,17 +344,22 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       const Pose pose = sampleClip(skeleton, clip, time);
       if (!options.jiggles.empty()) poses.push_back(pose);
       const RigEvaluation evaluation = evaluateRig(rig, pose, true);
-      std::vector<Trs> locals;
       std::vector<double> ratios;
       SkinFrame skin(skeleton.size() + muscle_count);
-      for (int j = 0; j < skeleton.size(); ++j) skin[j] = skinMatrix(pose, skeleton, j);
+      for (int j = 0; j < skeleton.size(); ++j) skin[j] = pose.world[j] * inverse_bind[j];
       for (int m = 0; m < muscle_count; ++m) {
-        const MusclePart& part = rigged.parts[m];
-        for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(evaluation, m, role), pose, parentOf(part, role)));
         ratios.push_back(evaluation.drivers[m].ratio);
-        skin[skeleton.size() + m] = matrixAt(evaluation.skinned, m) * result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
+        skin[skeleton.size() + m] = matrixAt(evaluation.skinned, m) * inverse_muscle_bind[m];
       }
-      baked.local.push_back(std::move(locals));
+      if (sampled) {
+        std::vector<Trs> locals;
+        locals.reserve(kRoles.size() * static_cast<size_t>(muscle_count));
+        for (int m = 0; m < muscle_count; ++m) {
+          const MusclePart& part = rigged.parts[m];
+          for (MuscleJointRole role : kRoles) locals.push_back(localTrs(roleWorld(evaluation, m, role), pose, parentOf(part, role)));
+        }
+        baked.local.push_back(std::move(locals));
+      }
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
@@ -318,20 +374,41 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // Weights per skinned part.
   const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
   result.gltf_weights = options.gltf_weights;
-  Approximations milli, fine;  // dequantized, skeleton indices
-  for (const MeasuredPart& weights : measured) {
+  // Dequantized, skeleton indices. The weights an engine skins with (the milli ones, or with
+  // GltfWeights::kUnorm16 the fine ones) take the place of the full weights in `measured`, which the
+  // volumes are measured with; the full weights move into the result.
+  Approximations milli, fine;
+  std::vector<InfluenceSet> milli_beside(unorm16 ? measured.size() : 0);
+  // Every part pruned, then rounded together (they share the moments of their joints' motion).
+  std::vector<InfluenceSet> pruned_parts;
+  std::vector<MotionPart> motion_parts;
+  for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences));
+  for (size_t a = 0; a < measured.size(); ++a)
+    motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[measured[a].mesh_part].positions});
+  std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
+  for (size_t a = 0; a < measured.size(); ++a) {
+    const MeasuredPart& weights = measured[a];
     const size_t p = static_cast<size_t>(weights.mesh_part);
+    // (The fit is done: `measured` now changes to what the volumes are measured with.)
     const MeshPart& mesh = character.meshes[p];
     BakedPart baked;
     baked.mesh_part = weights.mesh_part;
-    baked.full = weights.rig;
-    const InfluenceSet pruned = pruneInfluences(baked.full, options.influences);
-    const QuantizedInfluences quantized = quantizeForMotion(pruned, mesh.positions, all_frames, options.threads);
+    baked.full = std::move(measured[a].rig);
+    QuantizedInfluences quantized = std::move(quantized_parts[a]);
     const QuantizedInfluences quantized_fine =
-        unorm16 ? quantizeInfluences(pruned, kUnsignedShortScale) : QuantizedInfluences{};
+        unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale) : QuantizedInfluences{};
+    InfluenceSet().joints.swap(pruned_parts[a].joints);
+    std::vector<double>().swap(pruned_parts[a].weights);
     timing.weights += lap();
-    milli.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized));
-    if (unorm16) fine.emplace_back(static_cast<int>(p), dequantizeInfluences(quantized_fine));
+    if (unorm16) {
+      milli_beside[a] = dequantizeInfluences(quantized);
+      measured[a].rig = dequantizeInfluences(quantized_fine);
+      milli.emplace_back(static_cast<int>(p), &milli_beside[a]);
+      fine.emplace_back(static_cast<int>(p), &measured[a].rig);
+    } else {
+      measured[a].rig = dequantizeInfluences(quantized);
+      milli.emplace_back(static_cast<int>(p), &measured[a].rig);
+    }
 
     // Skin-local indices: the file's joint list, then the muscles' skinned joints.
     baked.skin_joints = mesh.skin_joints;
@@ -353,7 +430,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       }
       return influences;
     };
-    baked.quantized = skinLocal(quantized);
+    baked.quantized = skinLocal(std::move(quantized));
     const int skin_size = static_cast<int>(baked.skin_joints.size());
     baked.standard = standardSkinAttributes(unorm16 ? skinLocal(quantized_fine) : baked.quantized, skin_size,
                                             WeightStorage::kUnsignedShort);
@@ -365,31 +442,36 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   }
 
   timing.weights += lap();
-  // Deformation error of the pruned, quantized weights against the full-precision ones.
-  result.error = measureDeformation(character, result, milli, clip_frames, options.threads);
-  if (unorm16) result.gltf_error = measureDeformation(character, result, fine, clip_frames, options.threads);
-  timing.error = lap();
-
-  if (options.measure_quality) {
-    // Measured with the weights written, as an engine skins them.
-    for (size_t a = 0; a < measured.size(); ++a) measured[a].rig = unorm16 ? fine[a].second : milli[a].second;
-    std::vector<MeasuredClip> clips;
-    for (size_t c = 0; c < result.clips.size(); ++c) {
-      MeasuredClip clip;
-      clip.name = result.clips[c].name;
-      clip.times = result.clips[c].times;
-      clip.frames = &clip_frames[c];
+  // One pass over every frame for the deformation error of the pruned, quantized weights against the
+  // full-precision ones and, measured with the weights written as an engine skins them, the volumes.
+  std::vector<std::vector<ErrorWeights>> error_weights(unorm16 ? 2 : 1);
+  for (size_t a = 0; a < measured.size(); ++a) {
+    error_weights[0].push_back(ErrorWeights{&result.parts[a].full, milli[a].second});
+    if (unorm16) error_weights[1].push_back(ErrorWeights{&result.parts[a].full, fine[a].second});
+  }
+  std::vector<MeasuredClip> clips;
+  for (size_t c = 0; c < result.clips.size(); ++c) {
+    MeasuredClip clip;
+    clip.name = result.clips[c].name;
+    clip.times = result.clips[c].times;
+    clip.frames = &clip_frames[c];
+    if (options.measure_quality) {
       for (const std::vector<double>& ratios : result.clips[c].ratio) {
         std::vector<double> clamped(ratios.size());
         for (size_t m = 0; m < ratios.size(); ++m)
           clamped[m] = std::clamp(ratios[m], rigged.parts[m].compression, rigged.parts[m].stretch);
         clip.ratio.push_back(std::move(clamped));
       }
-      clips.push_back(std::move(clip));
     }
-    result.quality = measureDeformationQuality(character, options.regions, measured, rigged, clips, options.threads);
+    clips.push_back(std::move(clip));
   }
+  DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
+                                                    options.measure_quality, error_weights, options.threads);
+  if (options.measure_quality) result.quality = std::move(measures.quality);
   timing.quality = lap();
+  result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);
+  if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);
+  timing.error = lap();
   return result;
 }
 

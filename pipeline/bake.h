@@ -97,7 +97,8 @@ struct BakedClip {
   bool measure_only = false;  // Clip::measure_only: measured on (weights, errors), not written
   std::string name;
   std::vector<double> times;
-  // local[t][k]: TRS of baked joint k (relative to its parent) at times[t].
+  // local[t][k]: TRS of baked joint k (relative to its parent) at times[t]; empty when the motion is
+  // MuscleMotion::kRuntime, whose file has no channels for the muscle joints.
   std::vector<std::vector<Trs>> local;
   // ratio[t][m]: muscle m's length ratio L / L_rest (unclamped) at times[t].
   std::vector<std::vector<double>> ratio;
@@ -145,8 +146,10 @@ struct BakeTimings {
   double weights = 0.0;   // muscle weights, smoothing, pruning and rounding
   double fit = 0.0;       // fitting the muscles' response
   double pack = 0.0;      // glTF attributes and packed buffers
-  double error = 0.0;     // deformation error over every frame
-  double quality = 0.0;   // deformation-quality volumes over every frame
+  // The one pass over every frame that skins each vertex once (pipeline/deformation_quality.h
+  // measureDeformation()): the deformation-quality volumes and the deformation error in single precision.
+  double quality = 0.0;
+  double error = 0.0;     // each clip's largest deformation error, recomputed in double where it could be
 };
 
 // Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.

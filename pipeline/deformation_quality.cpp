@@ -1,6 +1,14 @@
 // Deformation quality: volumes of skinned surfaces (pipeline/skin_volume.h) under linear blend and
-// dual-quaternion skinning (pipeline/skinning.h) and the baked rig, and the muscles' skin displacement
-// along the normal. docs/deformation-quality.md.
+// dual-quaternion skinning and the baked rig, and the muscles' skin displacement along the normal.
+// docs/deformation-quality.md.
+//
+// Every frame is measured in one pass that skins each vertex once (pipeline/skinning_batch.h: single
+// precision, four vertices that share their joints in the lanes of one SSE register, the input's and
+// the rig's weights and up to two weight differences, whose displacement is the bake's deformation
+// error, blended from each joint's one transform). The volumes then take the three skinnings of a
+// triangle in the lanes of one register: with a, b, c the corners' x, y and z, one lane per skinning,
+// a . ((b - a) x (c - a)) needs no shuffles. Terms are summed in single precision eight at a time and
+// those sums in double.
 #include "pipeline/deformation_quality.h"
 
 #include <algorithm>
@@ -8,221 +16,661 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 
 #include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
+#include "pipeline/skinning_batch.h"
 
 namespace rigbake {
 namespace {
+
+constexpr int kMaxApproximations = 2;
+// Weight sets of the skinning batch: the two whose volumes are measured, then the weight differences
+// whose displacement is measured.
+constexpr int kInputSet = 0, kRigSet = 1, kFirstErrorSet = 2;
+// Lanes of the stored positions: one per skinning, in the order of the figures.
+constexpr int kSkinnings = 3;  // input (linear blend), dual quaternions, rig (linear blend)
+
+void keepExtreme(double change, double time, VolumeExtreme* extreme) {
+  if (std::abs(change) > std::abs(extreme->change)) *extreme = {change, time};
+}
+
+// Sums single-precision lanes in double, blocks of at most kBlock terms summed in single precision:
+// each rounding is relative to a few terms, not to the running total (the terms about a far origin are
+// many times the volume they add up to).
+class LaneSum {
+ public:
+  static constexpr size_t kBlock = 8;
+  void addBlock(__m128 block) {
+    low_ = _mm_add_pd(low_, _mm_cvtps_pd(block));
+    high_ = _mm_add_pd(high_, _mm_cvtps_pd(_mm_movehl_ps(block, block)));
+  }
+  void add(__m128 value) { addBlock(value); }
+  std::array<double, 4> total() const {
+    std::array<double, 4> out;
+    _mm_storeu_pd(out.data(), low_);
+    _mm_storeu_pd(out.data() + 2, high_);
+    return out;
+  }
+
+ private:
+  __m128d low_ = _mm_setzero_pd(), high_ = _mm_setzero_pd();
+};
+
+// A welded vertex's posed x, y and z, one skinning per lane (the fourth lane is not used).
+struct PlanarPosition {
+  __m128 x, y, z;
+};
+
+inline PlanarPosition loadPlanar(const Float4* planar, int w) {
+  const Float4* p = planar + 3 * static_cast<size_t>(w);
+  return {_mm_load_ps(p[0].v), _mm_load_ps(p[1].v), _mm_load_ps(p[2].v)};
+}
+
+inline PlanarPosition minus(const PlanarPosition& a, const PlanarPosition& b) {
+  return {_mm_sub_ps(a.x, b.x), _mm_sub_ps(a.y, b.y), _mm_sub_ps(a.z, b.z)};
+}
+
+// (b - a) x (c - a) in each lane: twice the triangle's area vector. The edges are short, so this keeps
+// single precision's digits where b x c of two corners far from the origin would cancel most of them.
+inline PlanarPosition areaVector(const PlanarPosition& a, const PlanarPosition& b, const PlanarPosition& c) {
+  const PlanarPosition u = minus(b, a), v = minus(c, a);
+  return {_mm_sub_ps(_mm_mul_ps(u.y, v.z), _mm_mul_ps(u.z, v.y)), _mm_sub_ps(_mm_mul_ps(u.z, v.x), _mm_mul_ps(u.x, v.z)),
+          _mm_sub_ps(_mm_mul_ps(u.x, v.y), _mm_mul_ps(u.y, v.x))};
+}
+
+inline __m128 dot(const PlanarPosition& a, const PlanarPosition& b) {
+  return _mm_add_ps(_mm_add_ps(_mm_mul_ps(a.x, b.x), _mm_mul_ps(a.y, b.y)), _mm_mul_ps(a.z, b.z));
+}
+
+// a . (b x c) in each lane, as a . ((b - a) x (c - a)), its equal.
+inline __m128 tetrahedron(const PlanarPosition& a, const PlanarPosition& b, const PlanarPosition& c) {
+  return dot(a, areaVector(a, b, c));
+}
+
+// The caps of `patch`'s holes (pipeline/skin_volume.cpp enclosedVolumeAbout()), positions relative to
+// the sum's origin, added to `sum`. A cap's centre is the mean of its loop's positions taken relative to
+// the loop's first vertex (small numbers), so its rounding is relative to the hole's size: the centre
+// moves every fan triangle of a cap the same way, and a rounding relative to the positions' size would
+// not average out over the few caps there are.
+void addCaps(const ClosedPatch& patch, const Float4* planar, const PlanarPosition& origin, LaneSum* sum) {
+  for (const std::vector<int>& hole : patch.holes) {
+    const PlanarPosition first = loadPlanar(planar, hole[0]);
+    PlanarPosition offset{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
+    for (size_t k = 1; k < hole.size(); ++k) {
+      const PlanarPosition d = minus(loadPlanar(planar, hole[k]), first);
+      offset = {_mm_add_ps(offset.x, d.x), _mm_add_ps(offset.y, d.y), _mm_add_ps(offset.z, d.z)};
+    }
+    const __m128 scale = _mm_set1_ps(1.0f / static_cast<float>(hole.size()));
+    offset = {_mm_mul_ps(offset.x, scale), _mm_mul_ps(offset.y, scale), _mm_mul_ps(offset.z, scale)};
+    __m128 terms = _mm_setzero_ps();
+    for (size_t k = 0; k < hole.size(); ++k) {
+      const PlanarPosition a = loadPlanar(planar, hole[k]);
+      const PlanarPosition b = loadPlanar(planar, hole[(k + 1) % hole.size()]);
+      // (a - o) . ((b - a) x (centre - a)), centre - a = (first - a) + offset.
+      const PlanarPosition u = minus(b, a), to_first = minus(first, a);
+      const PlanarPosition v{_mm_add_ps(to_first.x, offset.x), _mm_add_ps(to_first.y, offset.y), _mm_add_ps(to_first.z, offset.z)};
+      const PlanarPosition area{_mm_sub_ps(_mm_mul_ps(u.y, v.z), _mm_mul_ps(u.z, v.y)), _mm_sub_ps(_mm_mul_ps(u.z, v.x), _mm_mul_ps(u.x, v.z)),
+                                _mm_sub_ps(_mm_mul_ps(u.x, v.y), _mm_mul_ps(u.y, v.x))};
+      terms = _mm_add_ps(terms, dot(minus(a, origin), area));
+      if ((k + 1) % LaneSum::kBlock == 0) {
+        sum->addBlock(terms);
+        terms = _mm_setzero_ps();
+      }
+    }
+    sum->addBlock(terms);
+  }
+}
+
+// A muscle's skin move, summed over the parts at one frame (docs/deformation-quality.md).
+struct MoveSums {
+  int muscle = -1;
+  double weighted = 0.0, total = 0.0, max_out = 0.0, max_in = 0.0;
+  int vertices = 0;
+};
+
+struct MeasuredRegion {
+  ClosedPatch patch;
+  // Its triangles' area vectors come from the whole surface's loop (each triangle then in no other
+  // region: the preset's first rule that takes a triangle keeps it); otherwise it is summed on its own.
+  bool with_whole = false;
+};
 
 struct PreparedPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
   VolumeSurface surface;
-  std::vector<ClosedPatch> regions;  // one per DeformationQuality::regions entry (possibly empty)
+  std::vector<MeasuredRegion> regions;  // one per measured region
+  std::vector<int> region_of_triangle;  // per whole-surface triangle: the with_whole region holding it, or -1
+  // The whole surface's triangles ordered by region, in runs of one region (or none).
+  std::vector<std::array<int, 3>> ordered_triangles;
+  struct Run {
+    size_t begin = 0, end = 0;
+    int region = -1;
+  };
+  std::vector<Run> runs;
+  SkinningBatch batch;
+  std::vector<int> welded_of_lane;  // kSkinLanes per group: the welded vertex, -1: measured for the error only
+  // Per part vertex: the lane (kSkinLanes * group + lane) that skins it, or an exact copy of it.
+  std::vector<std::uint32_t> lane_of_vertex;
+  int approximations = 0;
+  // Per approximation, for the error's rounding bound: max over vertices of (|p - c| + 1) sum_k |w_k|,
+  // and the most joints a vertex's difference of weights has.
+  std::array<double, kMaxApproximations> error_scale{};
+  std::array<int, kMaxApproximations> widest{};
+  // Per muscle, the welded vertices carrying at least kMuscleSkinWeight of its skinned joint.
+  std::vector<std::vector<std::pair<int, double>>> muscle_skin;
 };
-
-void keepExtreme(double change, double time, VolumeExtreme* extreme) {
-  if (std::abs(change) > std::abs(extreme->change)) *extreme = {change, time};
-}
 
 struct FrameVolumes {
   double body[3] = {0, 0, 0};  // input, dual quaternion, rig
   std::vector<std::array<double, 3>> regions;
 };
 
+// What one worker reuses from frame to frame.
+struct Scratch {
+  FloatSkinFrame frame;
+  std::vector<Float4> planar;  // 3 per welded vertex: x, y, z, a skinning per lane
+  std::array<std::vector<float>, kMaxApproximations> squared;  // per lane: its squared error
+  std::vector<PlanarPosition> region_origin;
+  std::vector<LaneSum> region_sum;
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<char> moved;  // welded vertices whose skin move is measured at this frame
+  std::vector<int> moved_vertices;
+  std::vector<Eigen::Vector3d> input, rig;  // their double-precision posed positions
+  std::vector<int> moved_index;  // welded vertex -> index into moved_vertices
+};
+
+bool sameSlots(const InfluenceSet& set, size_t a, size_t b) {
+  const size_t slots = static_cast<size_t>(set.slots_per_vertex);
+  for (size_t k = 0; k < slots; ++k) {
+    if (set.joints[a * slots + k] != set.joints[b * slots + k] || set.weights[a * slots + k] != set.weights[b * slots + k])
+      return false;
+  }
+  return true;
+}
+
 }  // namespace
 
-DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
-                                             const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
-                                             const std::vector<MeasuredClip>& clips, int threads) {
+DeformationMeasures measureDeformation(const Character& character, const std::vector<BodyRegion>& regions,
+                                       const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
+                                       const std::vector<MeasuredClip>& clips, bool quality,
+                                       const std::vector<std::vector<ErrorWeights>>& errors, int threads) {
   const Skeleton& skeleton = character.skeleton;
   const int joint_count = skeleton.size();
-  DeformationQuality quality;
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+  const int approximations = static_cast<int>(errors.size());
+  assert(approximations <= kMaxApproximations);
+  DeformationMeasures measures;
+  DeformationQuality& figures = measures.quality;
+  const double weld_tolerance = 1e-6 * std::max(muscles.body_height, 1e-3);
 
   // Weld each part once; cut each region out of it and close it. Regions too flat to enclose a
   // meaningful volume are left out of the figures (and listed).
-  std::vector<int> mesh_parts;
-  for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
-  std::vector<std::vector<std::vector<int>>> region_triangles;
-  for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
-  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles.body_height, 1e-3));
+  std::vector<PreparedPart> prepared(parts.size());
   std::vector<size_t> kept;
-  quality.regions.clear();
-  for (size_t r = 0; r < regions.size(); ++r) {
-    if (measured.region_measured[r]) {
-      kept.push_back(r);
-      quality.regions.push_back(regions[r].name);
-    } else {
-      quality.unmeasured_regions.push_back(regions[r].name);
+  if (quality) {
+    std::vector<int> mesh_parts;
+    for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
+    std::vector<std::vector<std::vector<int>>> region_triangles;
+    for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
+    MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, weld_tolerance);
+    for (size_t r = 0; r < regions.size(); ++r) {
+      if (measured.region_measured[r]) {
+        kept.push_back(r);
+        figures.regions.push_back(regions[r].name);
+      } else {
+        figures.unmeasured_regions.push_back(regions[r].name);
+      }
     }
-  }
-  std::vector<PreparedPart> prepared;
-  for (size_t p = 0; p < parts.size(); ++p) {
-    PreparedPart part;
-    part.mesh = &character.meshes[parts[p].mesh_part];
-    part.weights = &parts[p];
-    part.surface = std::move(measured.surfaces[p]);
-    for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
-    prepared.push_back(std::move(part));
+    for (size_t p = 0; p < parts.size(); ++p) {
+      PreparedPart& part = prepared[p];
+      part.surface = std::move(measured.surfaces[p]);
+      std::vector<int> whole_of_part(character.meshes[parts[p].mesh_part].triangles.size(), -1);
+      for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) whole_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
+      // Which closed region each triangle is in; a triangle two regions claim leaves both to be summed
+      // on their own.
+      part.region_of_triangle.assign(part.surface.whole.triangles.size(), -1);
+      std::vector<char> shared(kept.size(), 0);
+      for (size_t k = 0; k < kept.size(); ++k) {
+        const size_t r = kept[k];
+        MeasuredRegion region;
+        region.patch = std::move(measured.regions[p][r]);
+        region.with_whole = true;
+        if (p < regions[r].triangles.size()) {
+          for (int t : regions[r].triangles[p]) {
+            const int i = whole_of_part[t];
+            if (i < 0) continue;
+            int& owner = part.region_of_triangle[static_cast<size_t>(i)];
+            if (owner >= 0 && owner != static_cast<int>(k)) shared[k] = shared[static_cast<size_t>(owner)] = 1;
+            owner = static_cast<int>(k);
+          }
+        }
+        part.regions.push_back(std::move(region));
+      }
+      for (size_t k = 0; k < kept.size(); ++k) {
+        if (!shared[k]) continue;
+        part.regions[k].with_whole = false;
+      }
+      for (int& owner : part.region_of_triangle)
+        if (owner >= 0 && !part.regions[static_cast<size_t>(owner)].with_whole) owner = -1;
+    }
+  } else {
+    for (size_t p = 0; p < parts.size(); ++p) prepared[p].surface = buildVolumeSurface(character.meshes[parts[p].mesh_part], weld_tolerance);
   }
   const size_t region_count = kept.size();
 
-  // The posed vertices of the three skinnings, kept from frame to frame by each chunk of frames.
-  struct Scratch {
-    std::vector<Eigen::Vector3d> posed[3];
-  };
-  auto volumesOf = [&](const std::vector<Eigen::Affine3d>* frame, Scratch* scratch) {
-    FrameVolumes out;
-    out.regions.assign(region_count, {0, 0, 0});
-    DualQuaternionFrame dual_quaternions;  // of the skeleton's joints, split once per frame
-    if (frame != nullptr && !prepared.empty()) {
-      const std::vector<Eigen::Affine3d> skeleton_frame(frame->begin(), frame->begin() + joint_count);
-      dual_quaternions = dualQuaternionFrame(skeleton_frame);
+  // Each part's vertices for the pass: the welded ones (volumes), and for the error every other vertex
+  // whose position or weights differ from its welded vertex's (an exact copy has the same error).
+  // Single-precision positions are about the middle of every part's bounding box, so that their
+  // rounding is relative to the body's size.
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (const MeasuredPart& part : parts) {
+    for (const Eigen::Vector3d& p : character.meshes[part.mesh_part].positions) {
+      low = low.cwiseMin(p);
+      high = high.cwiseMax(p);
     }
-    std::vector<Eigen::Vector3d>* posed = scratch->posed;
-    const std::array<const std::vector<Eigen::Vector3d>*, 3> skinnings = {&posed[0], &posed[1], &posed[2]};
-    for (const PreparedPart& part : prepared) {
-      if (frame == nullptr) {
-        posed[0] = weldedPositions(part.surface, part.mesh->positions);
-        posed[1] = posed[2] = posed[0];
-      } else {
-        skinInputAndRig(part.mesh->positions, part.weights->input, part.weights->rig, *frame, dual_quaternions,
-                        part.surface.vertex_of_weld, &posed[0], &posed[1], &posed[2]);
+  }
+  const Eigen::Vector3d centre = low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  DualQuaternionPivots pivots;
+  size_t widest_surface = 0;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    PreparedPart& part = prepared[p];
+    part.mesh = &character.meshes[parts[p].mesh_part];
+    part.weights = &parts[p];
+    part.approximations = approximations;
+    const std::vector<Eigen::Vector3d>& positions = part.mesh->positions;
+    const VolumeSurface& surface = part.surface;
+    std::vector<int> vertices;
+    std::vector<char> dual_quaternion;
+    std::vector<int> skinned_as(positions.size(), -1);  // the vertex whose lane holds this one's figures
+    for (size_t v = 0; v < positions.size(); ++v) {
+      const size_t first = static_cast<size_t>(surface.vertex_of_weld[surface.weld_of_vertex[v]]);
+      bool copy = first != v;
+      if (copy && approximations == 0) continue;
+      if (copy) {
+        copy = positions[v] == positions[first];
+        for (int a = 0; a < approximations && copy; ++a)
+          copy = sameSlots(*errors[a][p].reference, v, first) && sameSlots(*errors[a][p].approximation, v, first);
       }
-      const std::array<double, 3> body = enclosedVolumes(part.surface.whole, skinnings);
-      for (int k = 0; k < 3; ++k) out.body[k] += body[k];
-      for (size_t r = 0; r < region_count; ++r) {
-        const std::array<double, 3> region = enclosedVolumes(part.regions[r], skinnings);
-        for (int k = 0; k < 3; ++k) out.regions[r][k] += region[k];
+      skinned_as[v] = static_cast<int>(copy ? first : v);
+      if (copy) continue;
+      vertices.push_back(static_cast<int>(v));
+      dual_quaternion.push_back(quality && first == v);
+    }
+    std::array<SetWeights, kSkinSets> sets;
+    if (quality) {
+      sets[kInputSet].plus = &part.weights->input;
+      sets[kRigSet].plus = &part.weights->rig;
+    }
+    for (int a = 0; a < approximations; ++a) {
+      sets[kFirstErrorSet + a].plus = errors[a][p].reference;
+      sets[kFirstErrorSet + a].minus = errors[a][p].approximation;
+    }
+    part.batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, &pivots);
+    const SkinningBatch& batch = part.batch;
+    std::vector<std::uint32_t> lane_of_skinned(positions.size(), 0);
+    for (size_t g = 0; g < batch.groups(); ++g) {
+      for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+        const int v = batch.vertex[kSkinLanes * g + lane];
+        const bool welded = quality && v >= 0 && surface.vertex_of_weld[surface.weld_of_vertex[v]] == v;
+        part.welded_of_lane.push_back(welded ? surface.weld_of_vertex[v] : -1);
+        if (v < 0) continue;
+        lane_of_skinned[static_cast<size_t>(v)] = static_cast<std::uint32_t>(kSkinLanes * g + lane);
+        const double size = (positions[static_cast<size_t>(v)] - centre).norm() + 1.0;
+        for (int a = 0; a < approximations; ++a) {
+          double sum = 0.0;
+          int count = 0;
+          for (std::uint32_t slot = batch.first_slot[g]; slot < batch.first_slot[g + 1]; ++slot) {
+            const float weight = batch.weights[kSkinSets * slot + kFirstErrorSet + a].v[lane];
+            sum += std::abs(weight);
+            count += weight != 0.0f;
+          }
+          part.error_scale[a] = std::max(part.error_scale[a], size * sum);
+          part.widest[a] = std::max(part.widest[a], count);
+        }
       }
     }
-    return out;
-  };
+    if (approximations > 0) {
+      part.lane_of_vertex.resize(positions.size());
+      for (size_t v = 0; v < positions.size(); ++v) part.lane_of_vertex[v] = lane_of_skinned[static_cast<size_t>(skinned_as[v])];
+    }
+    if (quality) {
+      std::vector<size_t> order(surface.whole.triangles.size());
+      std::iota(order.begin(), order.end(), 0);
+      std::stable_sort(order.begin(), order.end(),
+                       [&](size_t a, size_t b) { return part.region_of_triangle[a] < part.region_of_triangle[b]; });
+      for (size_t i : order) {
+        const int region = part.region_of_triangle[i];
+        if (part.runs.empty() || part.runs.back().region != region)
+          part.runs.push_back({part.ordered_triangles.size(), part.ordered_triangles.size(), region});
+        part.ordered_triangles.push_back(surface.whole.triangles[i]);
+        part.runs.back().end = part.ordered_triangles.size();
+      }
+    }
+    if (quality) {
+      // The muscles' skin: a vertex counts for a muscle from kMuscleSkinWeight of its skinned joint.
+      const InfluenceSet& rig = part.weights->rig;
+      const size_t slots = static_cast<size_t>(rig.slots_per_vertex);
+      part.muscle_skin.resize(static_cast<size_t>(muscle_count));
+      for (int w = 0; w < surface.weldedCount(); ++w) {
+        const size_t v = static_cast<size_t>(surface.vertex_of_weld[w]);
+        for (int m = 0; m < muscle_count; ++m) {
+          double weight = 0.0;
+          for (size_t k = 0; k < slots; ++k) {
+            if (rig.joints[v * slots + k] == joint_count + m) weight += rig.weights[v * slots + k];
+          }
+          if (weight >= kMuscleSkinWeight) part.muscle_skin[static_cast<size_t>(m)].emplace_back(w, weight);
+        }
+      }
+    }
+    widest_surface = std::max(widest_surface, static_cast<size_t>(surface.weldedCount()));
+  }
 
-  Scratch bind_scratch;
-  const FrameVolumes bind = volumesOf(nullptr, &bind_scratch);
-  quality.body_volume = bind.body[0];
-  for (size_t r = 0; r < region_count; ++r) quality.region_volumes.push_back(bind.regions[r][0]);
+  // Bind volumes, in double from the bind positions themselves.
+  FrameVolumes bind;
+  bind.regions.assign(region_count, {0, 0, 0});
+  if (quality) {
+    for (const PreparedPart& part : prepared) {
+      const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, part.mesh->positions);
+      const double body = enclosedVolume(part.surface.whole, welded);
+      for (int k = 0; k < 3; ++k) bind.body[k] += body;
+      for (size_t r = 0; r < region_count; ++r) {
+        const double region = enclosedVolume(part.regions[r].patch, welded);
+        for (int k = 0; k < 3; ++k) bind.regions[r][k] += region;
+      }
+    }
+    figures.body_volume = bind.body[0];
+    for (size_t r = 0; r < region_count; ++r) figures.region_volumes.push_back(bind.regions[r][0]);
+  }
   auto change = [](double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; };
 
-  // Each muscle's most compressed and most stretched sample over every clip.
-  const int muscle_count = static_cast<int>(muscles.parts.size());
-  struct Sample {
-    int clip = -1, frame = -1;
-    double ratio = 1.0;
-  };
-  std::vector<Sample> most_compressed(muscle_count), most_stretched(muscle_count);
-
-  // Every frame's volumes at once, all clips' frames in one loop (chunks of a few frames reuse their
-  // posed vertices), then each clip's extremes in frame order, as one thread would find them.
+  // Every clip's frames in one list; each muscle's most compressed and most stretched sample over
+  // every clip, whose skin moves the pass measures on those frames.
   std::vector<std::pair<size_t, size_t>> clip_frame;  // (clip, frame) in clip order
   std::vector<size_t> first_frame;
   for (size_t c = 0; c < clips.size(); ++c) {
     first_frame.push_back(clip_frame.size());
     for (size_t t = 0; t < clips[c].times.size(); ++t) clip_frame.emplace_back(c, t);
   }
-  std::vector<FrameVolumes> all_volumes(clip_frame.size());
-  constexpr size_t kFramesPerChunk = 4;
-  parallelFor(threads, clip_frame.size(), kFramesPerChunk, [&](size_t, size_t begin, size_t end) {
-    Scratch scratch;
-    for (size_t i = begin; i < end; ++i)
-      all_volumes[i] = volumesOf(&(*clips[clip_frame[i].first].frames)[clip_frame[i].second], &scratch);
-  });
+  struct Sample {
+    int clip = -1, frame = -1;
+    double ratio = 1.0;
+  };
+  std::vector<Sample> most_compressed(muscle_count), most_stretched(muscle_count);
+  std::vector<std::vector<int>> moves_at(clip_frame.size());  // muscles measured at each frame
+  if (quality) {
+    for (size_t c = 0; c < clips.size(); ++c) {
+      for (size_t t = 0; t < clips[c].times.size(); ++t) {
+        for (int m = 0; m < muscle_count; ++m) {
+          const double ratio = clips[c].ratio[t][m];
+          if (ratio < most_compressed[m].ratio) most_compressed[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+          if (ratio > most_stretched[m].ratio) most_stretched[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+        }
+      }
+    }
+    for (int m = 0; m < muscle_count; ++m) {
+      for (const Sample* sample : {&most_compressed[m], &most_stretched[m]}) {
+        if (sample->clip < 0) continue;
+        std::vector<int>& at = moves_at[first_frame[sample->clip] + static_cast<size_t>(sample->frame)];
+        if (std::find(at.begin(), at.end(), m) == at.end()) at.push_back(m);
+      }
+    }
+  }
 
+  std::vector<FrameVolumes> all_volumes(clip_frame.size());
+  for (FrameVolumes& volumes : all_volumes) volumes.regions.assign(region_count, {0, 0, 0});
+  std::vector<std::vector<MoveSums>> all_moves(clip_frame.size());
+  measures.screened.assign(static_cast<size_t>(approximations),
+                           std::vector<std::vector<ScreenedError>>(clip_frame.size(), std::vector<ScreenedError>(parts.size())));
+
+  // One frame: skin every part's entries, keep the welded positions (about the centre), sum the
+  // volumes, the errors and the skin moves asked for there.
+  auto measureFrame = [&](size_t f, Scratch& scratch) {
+    const SkinFrame& skin = (*clips[clip_frame[f].first].frames)[clip_frame[f].second];
+    prepareFloatSkinFrame(skin, centre, quality ? joint_count : 0, pivots, &scratch.frame);
+    const FloatSkinFrame& frame = scratch.frame;
+    FrameVolumes& volumes = all_volumes[f];
+    const std::vector<int>& moved_muscles = moves_at[f];
+    std::vector<MoveSums>& moves = all_moves[f];
+    for (int m : moved_muscles) moves.push_back(MoveSums{m});
+    for (size_t p = 0; p < prepared.size(); ++p) {
+      const PreparedPart& part = prepared[p];
+      const SkinningBatch& batch = part.batch;
+      if (quality) scratch.planar.resize(3 * static_cast<size_t>(part.surface.weldedCount()));
+      Float4* planar = scratch.planar.data();
+      // The errors: each lane's squared distance, then summed and searched in vertex order (so that the
+      // figures of one approximation do not depend on what else is skinned with it).
+      for (int a = 0; a < part.approximations; ++a) scratch.squared[a].resize(kSkinLanes * batch.groups());
+      auto visit = [&](size_t g, const SkinnedGroup& group) {
+        if (quality) {
+          // Per vertex the stored lanes are (input, dual quaternion, rig, -): a transpose of the
+          // group's lanes.
+          for (int c = 0; c < 3; ++c) {
+            const __m128 bind = c == 0 ? group.x : c == 1 ? group.y : group.z;
+            __m128 input = _mm_add_ps(bind, group.offset[kInputSet][c]);
+            __m128 dual_quaternion = group.dual_quaternion[c];
+            __m128 rig = _mm_add_ps(bind, group.offset[kRigSet][c]);
+            __m128 unused = _mm_setzero_ps();
+            _MM_TRANSPOSE4_PS(input, dual_quaternion, rig, unused);
+            const __m128 lanes[kSkinLanes] = {input, dual_quaternion, rig, unused};
+            for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+              const int w = part.welded_of_lane[kSkinLanes * g + lane];
+              if (w >= 0) _mm_store_ps(planar[3 * static_cast<size_t>(w) + static_cast<size_t>(c)].v, lanes[lane]);
+            }
+          }
+        }
+        for (int a = 0; a < part.approximations; ++a) {
+          const __m128* offset = group.offset[kFirstErrorSet + a];
+          const __m128 squared = _mm_add_ps(_mm_add_ps(_mm_mul_ps(offset[0], offset[0]), _mm_mul_ps(offset[1], offset[1])),
+                                            _mm_mul_ps(offset[2], offset[2]));
+          _mm_storeu_ps(&scratch.squared[a][kSkinLanes * g], squared);
+        }
+      };
+      const size_t groups = batch.groups();
+      switch (part.approximations * 2 + (quality ? 1 : 0)) {
+        case 0: break;
+        case 1: skinSkinningBatch<0x3>(batch, frame, 0, groups, visit); break;
+        case 2: skinSkinningBatch<0x4>(batch, frame, 0, groups, visit); break;
+        case 3: skinSkinningBatch<0x7>(batch, frame, 0, groups, visit); break;
+        case 4: skinSkinningBatch<0xC>(batch, frame, 0, groups, visit); break;
+        default: skinSkinningBatch<0xF>(batch, frame, 0, groups, visit); break;
+      }
+      for (int a = 0; a < part.approximations; ++a) {
+        const float* squared = scratch.squared[a].data();
+        double sum_squared = 0.0;
+        float largest = 0.0f;
+        int largest_vertex = -1;
+        const int vertex_count = static_cast<int>(part.lane_of_vertex.size());
+        for (int v = 0; v < vertex_count; ++v) {
+          const float s = squared[part.lane_of_vertex[static_cast<size_t>(v)]];
+          sum_squared += static_cast<double>(s);
+          if (s > largest) {
+            largest = s;
+            largest_vertex = v;
+          }
+        }
+        ScreenedError& screened = measures.screened[static_cast<size_t>(a)][f][p];
+        DeformationError& error = screened.error;
+        error.vertex_count = vertex_count;
+        error.max_displacement = std::sqrt(static_cast<double>(largest));
+        error.max_vertex = largest_vertex;
+        if (vertex_count > 0) error.rms_displacement = std::sqrt(sum_squared / vertex_count);
+        // Rounding of the single-precision offsets (skinning_batch.h): each d_k within 8 units of
+        // roundoff of reach (|p - c| + 1), the blend within one more per slot, the length within 4.
+        const double unit = std::ldexp(1.0, -24);
+        screened.bound = 2.0 * ((part.widest[a] + 10) * unit * frame.reach * part.error_scale[a] +
+                                4.0 * unit * error.max_displacement);
+      }
+      if (!quality) continue;
+
+      // Volumes: the whole surface about its first vertex, each region about its own (so a region's
+      // terms are the size of the region, not of the body), as skin_volume.cpp sums them; a triangle's
+      // area vector serves the body and its region.
+      const ClosedPatch& whole = part.surface.whole;
+      const PlanarPosition zero{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
+      const PlanarPosition whole_origin = whole.triangles.empty() ? zero : loadPlanar(planar, whole.triangles[0][0]);
+      scratch.region_origin.resize(region_count);
+      scratch.region_sum.assign(region_count, LaneSum());
+      for (size_t r = 0; r < region_count; ++r) {
+        const ClosedPatch& patch = part.regions[r].patch;
+        scratch.region_origin[r] = patch.triangles.empty() ? zero : loadPlanar(planar, patch.triangles[0][0]);
+      }
+      // Runs of one region: the body's and the region's sums in registers, eight terms at a time.
+      LaneSum body;
+      for (const PreparedPart::Run& run : part.runs) {
+        LaneSum* region_sum = run.region >= 0 ? &scratch.region_sum[static_cast<size_t>(run.region)] : nullptr;
+        const PlanarPosition& region_origin = run.region >= 0 ? scratch.region_origin[static_cast<size_t>(run.region)] : zero;
+        for (size_t block = run.begin; block < run.end; block += LaneSum::kBlock) {
+          const size_t block_end = std::min(run.end, block + LaneSum::kBlock);
+          __m128 body_terms = _mm_setzero_ps(), region_terms = _mm_setzero_ps();
+          for (size_t i = block; i < block_end; ++i) {
+            const std::array<int, 3>& t = part.ordered_triangles[i];
+            const PlanarPosition a = loadPlanar(planar, t[0]);
+            const PlanarPosition area = areaVector(a, loadPlanar(planar, t[1]), loadPlanar(planar, t[2]));
+            body_terms = _mm_add_ps(body_terms, dot(minus(a, whole_origin), area));
+            if (region_sum != nullptr) region_terms = _mm_add_ps(region_terms, dot(minus(a, region_origin), area));
+          }
+          body.addBlock(body_terms);
+          if (region_sum != nullptr) region_sum->addBlock(region_terms);
+        }
+      }
+      addCaps(whole, planar, whole_origin, &body);
+      const std::array<double, 4> body_sum = body.total();
+      for (int k = 0; k < kSkinnings; ++k) volumes.body[k] += body_sum[k] / 6.0;
+      for (size_t r = 0; r < region_count; ++r) {
+        const MeasuredRegion& region = part.regions[r];
+        if (region.patch.triangles.empty()) continue;
+        LaneSum& sum = scratch.region_sum[r];
+        const PlanarPosition& own = scratch.region_origin[r];
+        if (!region.with_whole) {
+          for (const auto& t : region.patch.triangles)
+            sum.add(tetrahedron(minus(loadPlanar(planar, t[0]), own), minus(loadPlanar(planar, t[1]), own),
+                                minus(loadPlanar(planar, t[2]), own)));
+        }
+        addCaps(region.patch, planar, own, &sum);
+        const std::array<double, 4> region_sum = sum.total();
+        for (int k = 0; k < kSkinnings; ++k) volumes.regions[r][k] += region_sum[k] / 6.0;
+      }
+
+      // The skin's move along the input skinning's normal where a muscle is measured at this frame, in
+      // double as skin_volume.cpp and skinning.cpp compute it: only the muscles' vertices and the
+      // triangles around them, each normal summed over its triangles in the same order.
+      if (moved_muscles.empty()) continue;
+      const int welded_count = part.surface.weldedCount();
+      scratch.moved.assign(static_cast<size_t>(welded_count), 0);
+      for (const MoveSums& move : moves)
+        for (const auto& vertex_weight : part.muscle_skin[static_cast<size_t>(move.muscle)]) scratch.moved[vertex_weight.first] = 1;
+      scratch.moved_index.assign(static_cast<size_t>(welded_count), -1);
+      scratch.moved_vertices.clear();
+      auto need = [&](int w) {
+        if (scratch.moved_index[w] >= 0) return;
+        scratch.moved_index[w] = static_cast<int>(scratch.moved_vertices.size());
+        scratch.moved_vertices.push_back(part.surface.vertex_of_weld[w]);
+      };
+      for (const auto& t : whole.triangles) {
+        if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
+        for (int k = 0; k < 3; ++k) need(t[k]);
+      }
+      for (int w = 0; w < welded_count; ++w)
+        if (scratch.moved[w]) need(w);
+      skinLinearBlend(part.mesh->positions, part.weights->input, skin, scratch.moved_vertices, &scratch.input);
+      skinLinearBlend(part.mesh->positions, part.weights->rig, skin, scratch.moved_vertices, &scratch.rig);
+      scratch.normals.assign(scratch.moved_vertices.size(), Eigen::Vector3d::Zero());
+      for (const auto& t : whole.triangles) {
+        if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
+        const Eigen::Vector3d& a = scratch.input[scratch.moved_index[t[0]]];
+        const Eigen::Vector3d area = (scratch.input[scratch.moved_index[t[1]]] - a).cross(scratch.input[scratch.moved_index[t[2]]] - a);
+        for (int k = 0; k < 3; ++k) scratch.normals[scratch.moved_index[t[k]]] += area;
+      }
+      for (MoveSums& move : moves) {
+        for (const auto& [w, weight] : part.muscle_skin[static_cast<size_t>(move.muscle)]) {
+          const size_t i = static_cast<size_t>(scratch.moved_index[w]);
+          Eigen::Vector3d normal = scratch.normals[i];
+          const double length = normal.norm();
+          if (length > 0) normal /= length;
+          const double along = (scratch.rig[i] - scratch.input[i]).dot(normal);
+          move.weighted += weight * along;
+          move.total += weight;
+          move.max_out = std::max(move.max_out, along);
+          move.max_in = std::max(move.max_in, -along);
+          ++move.vertices;
+        }
+      }
+    }
+  };
+
+  // Frames in chunks of a few, each worker reusing its scratch; every frame writes only its own figures.
+  constexpr size_t kFramesPerChunk = 2;
+  std::vector<Scratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, clip_frame.size(), kFramesPerChunk)));
+  for (Scratch& s : scratch) s.planar.reserve(3 * widest_surface);
+  parallelForWorkers(threads, clip_frame.size(), kFramesPerChunk, [&](size_t worker, size_t, size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) measureFrame(f, scratch[worker]);
+  });
+  if (!quality) return measures;
+
+  // Each clip's extremes in frame order.
   for (size_t c = 0; c < clips.size(); ++c) {
     const MeasuredClip& clip = clips[c];
-    ClipQuality figures;
-    figures.clip = clip.name;
-    figures.regions.resize(region_count);
+    ClipQuality clip_figures;
+    clip_figures.clip = clip.name;
+    clip_figures.regions.resize(region_count);
     double worst = -1.0;
     const FrameVolumes* clip_volumes = all_volumes.data() + first_frame[c];
     for (size_t t = 0; t < clip.times.size(); ++t) {
       const FrameVolumes& volumes = clip_volumes[t];
       const double time = clip.times[t];
-      keepExtreme(change(volumes.body[0], bind.body[0]), time, &figures.body.input);
-      keepExtreme(change(volumes.body[1], bind.body[1]), time, &figures.body.dual_quaternion);
+      keepExtreme(change(volumes.body[0], bind.body[0]), time, &clip_figures.body.input);
+      keepExtreme(change(volumes.body[1], bind.body[1]), time, &clip_figures.body.dual_quaternion);
       const double rig_change = change(volumes.body[2], bind.body[2]);
-      keepExtreme(rig_change, time, &figures.body.rig);
+      keepExtreme(rig_change, time, &clip_figures.body.rig);
       if (std::abs(rig_change) > worst) {
         worst = std::abs(rig_change);
-        figures.worst_frame = static_cast<int>(t);
+        clip_figures.worst_frame = static_cast<int>(t);
       }
       for (size_t r = 0; r < region_count; ++r) {
-        keepExtreme(change(volumes.regions[r][0], bind.regions[r][0]), time, &figures.regions[r].input);
-        keepExtreme(change(volumes.regions[r][1], bind.regions[r][1]), time, &figures.regions[r].dual_quaternion);
-        keepExtreme(change(volumes.regions[r][2], bind.regions[r][2]), time, &figures.regions[r].rig);
-      }
-      for (int m = 0; m < muscle_count; ++m) {
-        const double ratio = clip.ratio[t][m];
-        if (ratio < most_compressed[m].ratio) most_compressed[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
-        if (ratio > most_stretched[m].ratio) most_stretched[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+        keepExtreme(change(volumes.regions[r][0], bind.regions[r][0]), time, &clip_figures.regions[r].input);
+        keepExtreme(change(volumes.regions[r][1], bind.regions[r][1]), time, &clip_figures.regions[r].dual_quaternion);
+        keepExtreme(change(volumes.regions[r][2], bind.regions[r][2]), time, &clip_figures.regions[r].rig);
       }
     }
-    quality.clips.push_back(std::move(figures));
+    figures.clips.push_back(std::move(clip_figures));
   }
 
-  // The skin's move along the input skinning's normal at those samples; posed surfaces are cached by
-  // sample, as several muscles peak together.
-  struct PosedSample {
-    std::vector<std::vector<Eigen::Vector3d>> input, rig, normals;  // per part, welded
-  };
-  std::map<std::pair<int, int>, PosedSample> cache;
-  auto posedAt = [&](const Sample& sample) -> const PosedSample& {
-    auto it = cache.find({sample.clip, sample.frame});
-    if (it != cache.end()) return it->second;
-    const std::vector<Eigen::Affine3d>& frame = (*clips[sample.clip].frames)[sample.frame];
-    PosedSample posed;
-    for (const PreparedPart& part : prepared) {
-      posed.input.emplace_back();
-      posed.rig.emplace_back();
-      skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.surface.vertex_of_weld, &posed.input.back());
-      skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.surface.vertex_of_weld, &posed.rig.back());
-      posed.normals.push_back(vertexNormals(part.surface.whole, posed.input.back()));
-    }
-    return cache.emplace(std::make_pair(sample.clip, sample.frame), std::move(posed)).first->second;
-  };
   auto skinMove = [&](int m, const Sample& sample, bool wanted) {
     MuscleSkinMove move;
     if (!wanted || sample.clip < 0) return move;
-    const PosedSample& posed = posedAt(sample);
-    double weighted = 0.0, total = 0.0;
-    for (size_t p = 0; p < prepared.size(); ++p) {
-      const PreparedPart& part = prepared[p];
-      const InfluenceSet& rig = part.weights->rig;
-      const int slots = rig.slots_per_vertex;
-      for (int w = 0; w < part.surface.weldedCount(); ++w) {
-        const int v = part.surface.vertex_of_weld[w];
-        double weight = 0.0;
-        for (int k = 0; k < slots; ++k) {
-          if (rig.joints[v * slots + k] == joint_count + m) weight += rig.weights[v * slots + k];
-        }
-        if (weight < kMuscleSkinWeight) continue;
-        const double along = (posed.rig[p][w] - posed.input[p][w]).dot(posed.normals[p][w]);
-        weighted += weight * along;
-        total += weight;
-        move.max_out = std::max(move.max_out, along);
-        move.max_in = std::max(move.max_in, -along);
-        ++move.vertices;
-      }
+    const size_t f = first_frame[sample.clip] + static_cast<size_t>(sample.frame);
+    for (const MoveSums& sums : all_moves[f]) {
+      if (sums.muscle != m) continue;
+      if (sums.vertices == 0) return MuscleSkinMove{};
+      move.measured = true;
+      move.clip = clips[sample.clip].name;
+      move.time = clips[sample.clip].times[sample.frame];
+      move.ratio = sample.ratio;
+      move.mean = sums.weighted / sums.total;
+      move.max_out = sums.max_out;
+      move.max_in = sums.max_in;
+      move.vertices = sums.vertices;
     }
-    if (move.vertices == 0) return MuscleSkinMove{};
-    move.measured = true;
-    move.clip = clips[sample.clip].name;
-    move.time = clips[sample.clip].times[sample.frame];
-    move.ratio = sample.ratio;
-    move.mean = weighted / total;
     return move;
   };
   for (int m = 0; m < muscle_count; ++m) {
-    MuscleQuality figures;
-    figures.muscle = muscles.parts[m].fullName();
-    figures.kind = muscles.parts[m].kind;
-    figures.compressed = skinMove(m, most_compressed[m], most_compressed[m].ratio < 1.0);
-    figures.stretched = skinMove(m, most_stretched[m], most_stretched[m].ratio > 1.0);
-    quality.muscles.push_back(std::move(figures));
+    MuscleQuality muscle;
+    muscle.muscle = muscles.parts[m].fullName();
+    muscle.kind = muscles.parts[m].kind;
+    muscle.compressed = skinMove(m, most_compressed[m], most_compressed[m].ratio < 1.0);
+    muscle.stretched = skinMove(m, most_stretched[m], most_stretched[m].ratio > 1.0);
+    figures.muscles.push_back(std::move(muscle));
   }
-  return quality;
+  return measures;
+}
+
+DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
+                                             const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
+                                             const std::vector<MeasuredClip>& clips, int threads) {
+  return measureDeformation(character, regions, parts, muscles, clips, true, {}, threads).quality;
 }
 
 }  // namespace rigbake

@@ -12,6 +12,7 @@
 #include "anatomy/body_regions.h"
 #include "anatomy/character.h"
 #include "anatomy/muscle_set.h"
+#include "pipeline/deformation_error.h"
 #include "pipeline/influences.h"
 #include "pipeline/quantize_for_motion.h"
 #include "pipeline/skin_volume.h"
@@ -87,5 +88,35 @@ struct DeformationQuality {
 DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
                                              const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
                                              const std::vector<MeasuredClip>& clips, int threads = 1);
+
+// Rounded weights to measure in the same pass: how far `approximation` moves each vertex from where
+// `reference` skins it (pipeline/deformation_error.h), for one part.
+struct ErrorWeights {
+  const InfluenceSet* reference = nullptr;
+  const InfluenceSet* approximation = nullptr;
+};
+
+// One frame's skinningDeformationError() of one part, from single-precision skinning: max_displacement
+// and rms_displacement are within `bound` of the double figures, and max_vertex is the double figure's
+// unless another vertex comes within 2 * bound of it.
+struct ScreenedError {
+  DeformationError error;
+  double bound = 0.0;
+};
+
+struct DeformationMeasures {
+  DeformationQuality quality;  // empty unless asked for
+  // screened[a][f][p]: approximation a, frame f (every clip's frames in clip order), part p.
+  std::vector<std::vector<std::vector<ScreenedError>>> screened;
+};
+
+// One pass over every frame of every clip that skins each vertex once per frame (pipeline/
+// skinning_batch.h) for both measures: the deformation quality when `quality` is set (as
+// measureDeformationQuality()), and the error of each errors[a] (one ErrorWeights per part, in
+// `parts` order; at most two approximations).
+DeformationMeasures measureDeformation(const Character& character, const std::vector<BodyRegion>& regions,
+                                       const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
+                                       const std::vector<MeasuredClip>& clips, bool quality,
+                                       const std::vector<std::vector<ErrorWeights>>& errors, int threads);
 
 }  // namespace rigbake

@@ -40,12 +40,37 @@ void requireShape(int slots_per_vertex, size_t joints, size_t weights, const cha
     fail("INTERNAL", "", std::string(what) + ": joints and weights do not hold whole vertices");
 }
 
+// A stable sort for the few slots of one vertex: insertion sort, which allocates nothing (std::stable_sort
+// takes a buffer from the heap on every call). A stable sort's result is defined by the comparison
+// alone, so it is std::stable_sort's.
+template <typename Iterator, typename Less>
+void stableSortSmall(Iterator begin, Iterator end, Less less) {
+  for (Iterator i = begin; i != end; ++i) {
+    auto value = std::move(*i);
+    Iterator j = i;
+    for (; j != begin && less(value, *(j - 1)); --j) *j = std::move(*(j - 1));
+    *j = std::move(value);
+  }
+}
+
+// Per-vertex working lists, kept from vertex to vertex so that the loops over every vertex do not
+// allocate per vertex (the same steps on the same values: the same results).
+struct VertexScratch {
+  std::vector<Slot> slots, merged;
+  std::vector<IntegerSlot> units;
+  std::vector<double> remainders;
+  std::vector<std::int64_t> integer_remainders;
+  std::vector<bool> eligible;
+  std::vector<size_t> rank;
+};
+
 // The non-zero slots of one vertex, a joint named twice merged into one slot (both slots move the
-// vertex by the same matrix, so their sum is the joint's influence), in canonical order.
-std::vector<Slot> canonicalSlots(const InfluenceSet& set, int vertex) {
+// vertex by the same matrix, so their sum is the joint's influence), in canonical order, into
+// scratch->merged.
+const std::vector<Slot>& canonicalSlots(const InfluenceSet& set, int vertex, VertexScratch* scratch) {
   const int slots = set.slots_per_vertex;
-  std::vector<Slot> out;
-  out.reserve(slots);
+  std::vector<Slot>& out = scratch->slots;
+  out.clear();
   for (int k = 0; k < slots; ++k) {
     size_t index = static_cast<size_t>(vertex) * slots + k;
     double weight = set.weights[index];
@@ -57,7 +82,8 @@ std::vector<Slot> canonicalSlots(const InfluenceSet& set, int vertex) {
     out.push_back({set.joints[index], weight});
   }
   std::sort(out.begin(), out.end(), [](const Slot& a, const Slot& b) { return a.joint < b.joint; });
-  std::vector<Slot> merged;
+  std::vector<Slot>& merged = scratch->merged;
+  merged.clear();
   for (const Slot& slot : out) {
     if (!merged.empty() && merged.back().joint == slot.joint) {
       merged.back().weight += slot.weight;
@@ -65,7 +91,7 @@ std::vector<Slot> canonicalSlots(const InfluenceSet& set, int vertex) {
       merged.push_back(slot);
     }
   }
-  std::stable_sort(merged.begin(), merged.end(), [](const Slot& a, const Slot& b) { return a.weight > b.weight; });
+  stableSortSmall(merged.begin(), merged.end(), [](const Slot& a, const Slot& b) { return a.weight > b.weight; });
   return merged;
 }
 
@@ -74,15 +100,16 @@ std::vector<Slot> canonicalSlots(const InfluenceSet& set, int vertex) {
 // that had no influence never gains one.
 template <typename Remainder>
 void distributeMissingUnits(std::vector<IntegerSlot>& slots, const std::vector<Remainder>& remainders,
-                            const std::vector<bool>& eligible, std::int64_t full_scale) {
+                            const std::vector<bool>& eligible, std::int64_t full_scale, std::vector<size_t>* rank_scratch) {
   std::int64_t total = 0;
   for (const IntegerSlot& slot : slots) total += slot.units;
-  std::vector<size_t> rank;
+  std::vector<size_t>& rank = *rank_scratch;
+  rank.clear();
   for (size_t k = 0; k < slots.size(); ++k) {
     if (eligible[k]) rank.push_back(k);
   }
   if (rank.empty()) fail("INTERNAL", "", "a vertex has no weight to quantize");
-  std::stable_sort(rank.begin(), rank.end(), [&](size_t a, size_t b) { return remainders[a] > remainders[b]; });
+  stableSortSmall(rank.begin(), rank.end(), [&](size_t a, size_t b) { return remainders[a] > remainders[b]; });
   // Exact arithmetic leaves 0 <= missing < rank.size(). Floating-point shares can stray by an ulp, so
   // the loops also cope with a surplus and wrap around instead of trusting that bound.
   std::int64_t missing = full_scale - total;
@@ -96,9 +123,10 @@ void distributeMissingUnits(std::vector<IntegerSlot>& slots, const std::vector<R
   }
 }
 
-// Writes one vertex in canonical order into `out` starting at `base`; zero slots get joint 0.
-void writeCanonical(std::vector<IntegerSlot> slots, int slots_per_vertex, size_t base, QuantizedInfluences* out) {
-  std::stable_sort(slots.begin(), slots.end(), [](const IntegerSlot& a, const IntegerSlot& b) {
+// Writes one vertex in canonical order into `out` starting at `base` (sorting `slots`); zero slots get
+// joint 0.
+void writeCanonical(std::vector<IntegerSlot>& slots, int slots_per_vertex, size_t base, QuantizedInfluences* out) {
+  stableSortSmall(slots.begin(), slots.end(), [](const IntegerSlot& a, const IntegerSlot& b) {
     if (a.units != b.units) return a.units > b.units;
     return a.joint < b.joint;
   });
@@ -179,14 +207,15 @@ InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences) {
   const int vertices = set.vertexCount();
   out.joints.assign(static_cast<size_t>(vertices) * max_influences, 0);
   out.weights.assign(static_cast<size_t>(vertices) * max_influences, 0.0);
+  VertexScratch scratch;
   for (int v = 0; v < vertices; ++v) {
-    std::vector<Slot> slots = canonicalSlots(set, v);
+    const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
     if (slots.empty()) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to prune");
-    if (static_cast<int>(slots.size()) > max_influences) slots.resize(max_influences);
+    const size_t count = std::min(slots.size(), static_cast<size_t>(max_influences));
     double kept = 0.0;
-    for (const Slot& slot : slots) kept += slot.weight;
+    for (size_t k = 0; k < count; ++k) kept += slots[k].weight;
     size_t base = static_cast<size_t>(v) * max_influences;
-    for (size_t k = 0; k < slots.size(); ++k) {
+    for (size_t k = 0; k < count; ++k) {
       out.joints[base + k] = slots[k].joint;
       out.weights[base + k] = slots[k].weight / kept;
     }
@@ -202,22 +231,25 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale) 
   out.full_scale = full_scale;
   out.joints.assign(set.joints.size(), 0);
   out.weights.assign(set.joints.size(), 0);
+  VertexScratch scratch;
   for (int v = 0; v < set.vertexCount(); ++v) {
-    std::vector<Slot> slots = canonicalSlots(set, v);
+    const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
     double sum = 0.0;
     for (const Slot& slot : slots) sum += slot.weight;
     if (!(sum > 0.0)) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to quantize");
-    std::vector<IntegerSlot> units(slots.size());
-    std::vector<double> remainders(slots.size());
-    std::vector<bool> eligible(slots.size(), true);
+    std::vector<IntegerSlot>& units = scratch.units;
+    std::vector<double>& remainders = scratch.remainders;
+    units.resize(slots.size());
+    remainders.resize(slots.size());
+    scratch.eligible.assign(slots.size(), true);
     for (size_t k = 0; k < slots.size(); ++k) {
       double share = slots[k].weight / sum * full_scale;
       double whole = std::floor(share);
       units[k] = {slots[k].joint, static_cast<std::int64_t>(whole)};
       remainders[k] = share - whole;
     }
-    distributeMissingUnits(units, remainders, eligible, full_scale);
-    writeCanonical(std::move(units), out.slots_per_vertex, static_cast<size_t>(v) * out.slots_per_vertex, &out);
+    distributeMissingUnits(units, remainders, scratch.eligible, full_scale, &scratch.rank);
+    writeCanonical(units, out.slots_per_vertex, static_cast<size_t>(v) * out.slots_per_vertex, &out);
   }
   return out;
 }
@@ -234,11 +266,15 @@ QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, i
   out.weights.assign(quantized.joints.size(), 0);
   const int slots = quantized.slots_per_vertex;
   const std::int64_t old_scale = quantized.full_scale;
+  VertexScratch scratch;
+  std::vector<IntegerSlot>& units = scratch.units;
+  std::vector<std::int64_t>& remainders = scratch.integer_remainders;
+  std::vector<bool>& eligible = scratch.eligible;
   for (int v = 0; v < quantized.vertexCount(); ++v) {
     size_t base = static_cast<size_t>(v) * slots;
-    std::vector<IntegerSlot> units(slots);
-    std::vector<std::int64_t> remainders(slots);
-    std::vector<bool> eligible(slots);
+    units.resize(static_cast<size_t>(slots));
+    remainders.resize(static_cast<size_t>(slots));
+    eligible.resize(static_cast<size_t>(slots));
     std::int64_t sum = 0;
     for (int k = 0; k < slots; ++k) {
       std::int64_t scaled = static_cast<std::int64_t>(quantized.weights[base + k]) * full_scale;
@@ -250,8 +286,8 @@ QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, i
     if (sum != old_scale)
       fail("INTERNAL", "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not " +
                                std::to_string(old_scale));
-    distributeMissingUnits(units, remainders, eligible, full_scale);
-    writeCanonical(std::move(units), slots, base, &out);
+    distributeMissingUnits(units, remainders, eligible, full_scale, &scratch.rank);
+    writeCanonical(units, slots, base, &out);
   }
   return out;
 }

@@ -5,6 +5,7 @@
 #include "pipeline/muscle_weights.h"
 
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 
 #include <algorithm>
 #include <cassert>
@@ -41,21 +42,48 @@ double falloff(double distance, double radius) {
   return (1.0 - x * x) * (1.0 - x * x);
 }
 
-void smooth(std::vector<double>* field, const SurfaceGraph& surface, const MuscleWeightOptions& options) {
-  std::vector<double> next(field->size());
+// One muscle's share field over the welded vertices, kept from muscle to muscle by a worker. `field`
+// and `next` are zero outside `active`, the vertices whose share may be above 0.
+struct ShareScratch {
+  std::vector<double> field, next;
+  std::vector<int> active, grown;
+  std::vector<int> stamp;  // the pass a vertex last joined `grown` in
+  int pass = 0;
+};
+
+// Umbrella passes next = f + lambda (mean of the one-ring - f). A vertex whose one-ring and itself are
+// all 0 stays exactly 0, so each pass updates only the vertices within one ring of the field's support;
+// the others would be recomputed to the same 0.
+void smooth(const SurfaceGraph& surface, const MuscleWeightOptions& options, ShareScratch* scratch) {
+  std::vector<double>& field = scratch->field;
+  std::vector<double>& next = scratch->next;
   for (int pass = 0; pass < options.smoothing_iterations; ++pass) {
-    for (int w = 0; w < surface.weldedCount(); ++w) {
-      const std::vector<int>& ring = surface.neighbours[w];
-      if (ring.empty()) {
-        next[w] = (*field)[w];
+    // The support grows by one ring per pass: next is written on all of it, so what it held two passes
+    // ago (a subset) is overwritten.
+    ++scratch->pass;
+    scratch->grown.clear();
+    auto grow = [&](int w) {
+      if (scratch->stamp[w] == scratch->pass) return;
+      scratch->stamp[w] = scratch->pass;
+      scratch->grown.push_back(w);
+    };
+    for (int w : scratch->active) {
+      grow(w);
+      for (std::uint32_t k = surface.first_neighbour[w]; k < surface.first_neighbour[w + 1]; ++k) grow(surface.neighbours[k]);
+    }
+    for (int w : scratch->grown) {
+      const std::uint32_t begin = surface.first_neighbour[w], end = surface.first_neighbour[w + 1];
+      if (begin == end) {
+        next[w] = field[w];
         continue;
       }
       double mean = 0.0;
-      for (int n : ring) mean += (*field)[n];
-      mean /= static_cast<double>(ring.size());
-      next[w] = (*field)[w] + options.smoothing_lambda * (mean - (*field)[w]);
+      for (std::uint32_t k = begin; k < end; ++k) mean += field[surface.neighbours[k]];
+      mean /= static_cast<double>(end - begin);
+      next[w] = field[w] + options.smoothing_lambda * (mean - field[w]);
     }
-    field->swap(next);
+    field.swap(next);
+    scratch->active.swap(scratch->grown);
   }
 }
 
@@ -136,14 +164,23 @@ std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part)
 }
 
 MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface, const MuscleSet& muscles,
-                          const std::vector<double>& radii, const MuscleWeightOptions& options) {
+                          const std::vector<double>& radii, const MuscleWeightOptions& options, int threads) {
   assert(radii.size() == muscles.parts.size());
-  std::vector<Eigen::Vector3d> welded_position(surface.weldedCount());
+  const int welded_count = surface.weldedCount();
+  std::vector<Eigen::Vector3d> welded_position(welded_count);
   for (int v = static_cast<int>(part.positions.size()) - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
-  MuscleShares share(muscles.parts.size());
-  for (size_t m = 0; m < muscles.parts.size(); ++m) {
+  const size_t muscle_count = muscles.parts.size();
+  // Each muscle's shares above 0, welded vertices ascending.
+  std::vector<std::vector<std::pair<int, double>>> per_muscle(muscle_count);
+  std::vector<ShareScratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, muscle_count, 1)));
+  parallelForWorkers(threads, muscle_count, 1, [&](size_t worker, size_t, size_t m, size_t) {
+    ShareScratch& work = scratch[worker];
+    if (work.field.size() != static_cast<size_t>(welded_count)) {
+      work.field.assign(welded_count, 0.0);
+      work.next.assign(welded_count, 0.0);
+      work.stamp.assign(welded_count, 0);
+    }
     const MusclePart& muscle = muscles.parts[m];
-    share[m].assign(surface.weldedCount(), 0.0);
     // A muscle drives the skin on its own side of the limb (its belly's side, the rest up axis): a bulge
     // that moved the whole circumference would only shift the limb, pushing its far side in. A
     // corrective drives the blended skin around its span, all of it.
@@ -151,54 +188,92 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
     const std::vector<double> blend = corrective ? blendFactors(skeleton, part, surface, muscle.insertion.joint, options)
                                                  : std::vector<double>();
     const Eigen::Vector3d up = muscleRestFrame(muscle, skeleton).up;
-    for (int w = 0; w < surface.weldedCount(); ++w) {
+    // Vertices outside the segment's box widened by the radius are farther than the radius from it:
+    // falloff 0. (Widened a little more, so that a distance rounded down to the radius still counts.)
+    const double reach = radii[m] * (1.0 + 1e-9) + 1e-12;
+    const Eigen::Vector3d low = muscle.origin.world.cwiseMin(muscle.insertion.world).array() - reach;
+    const Eigen::Vector3d high = muscle.origin.world.cwiseMax(muscle.insertion.world).array() + reach;
+    work.active.clear();
+    for (int w = 0; w < welded_count; ++w) {
       const Eigen::Vector3d& p = welded_position[w];
+      if ((p.array() < low.array()).any() || (p.array() > high.array()).any()) continue;
       const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);
       const Eigen::Vector3d away = p - closest;
       const double facing = away.norm() > 0.0 ? away.normalized().dot(up) : 1.0;
-      share[m][w] = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options));
+      const double share = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options));
+      if (share == 0.0) continue;
+      work.field[w] = share;
+      work.active.push_back(w);
     }
-    smooth(&share[m], surface, options);
-    // After the smoothing, so that a corrective moves no skin its carrier holds alone (skin that plain
-    // skinning does not stretch); the blend factor is as smooth as the input's weights are.
-    if (corrective) {
-      for (int w = 0; w < surface.weldedCount(); ++w) share[m][w] *= blend[w];
+    smooth(surface, options, &work);
+    std::sort(work.active.begin(), work.active.end());
+    // After the smoothing, a corrective's share is scaled by its blend factor, so that it moves no skin
+    // its carrier holds alone (skin that plain skinning does not stretch); the blend factor is as smooth
+    // as the input's weights are.
+    for (int w : work.active) {
+      const double value = work.field[w] * (corrective ? blend[w] : 1.0);
+      if (value > 0.0) per_muscle[m].emplace_back(w, value);
+      work.field[w] = work.next[w] = 0.0;
+    }
+  });
+  MuscleShares shares;
+  shares.first.assign(static_cast<size_t>(welded_count) + 1, 0);
+  for (const auto& list : per_muscle)
+    for (const auto& [w, value] : list) ++shares.first[static_cast<size_t>(w) + 1];
+  for (int w = 0; w < welded_count; ++w) shares.first[w + 1] += shares.first[w];
+  shares.muscle.resize(shares.first.back());
+  shares.share.resize(shares.first.back());
+  std::vector<std::uint32_t> fill(shares.first.begin(), shares.first.end() - 1);
+  for (size_t m = 0; m < muscle_count; ++m) {
+    for (const auto& [w, value] : per_muscle[m]) {
+      shares.muscle[fill[w]] = static_cast<int>(m);
+      shares.share[fill[w]++] = value;
     }
   }
-  return share;
+  return shares;
 }
 
 void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGraph>& surfaces,
                          const std::vector<MuscleShares>& shares, MuscleSet* muscles) {
   const Skeleton& skeleton = character.skeleton;
-  for (size_t m = 0; m < muscles->parts.size(); ++m) {
-    MusclePart& muscle = muscles->parts[m];
-    if (muscle.carrier >= 0) continue;
-    std::vector<double> mass(skeleton.size(), 0.0);
-    std::vector<char> spans(skeleton.size(), 0);
-    for (int joint : spannedJoints(skeleton, muscle)) spans[joint] = 1;
-    size_t p = 0;
-    for (const MeshPart& part : character.meshes) {
-      if (!part.skinned || part.positions.empty()) continue;
-      const std::vector<double>& share = shares[p][m];
-      const std::vector<int>& weld = surfaces[p].weld_of_vertex;
-      ++p;
-      const int slots = part.influences_per_vertex;
-      for (size_t v = 0; v < part.positions.size(); ++v) {
-        const double s = share[weld[v]];
-        if (s <= 0.0) continue;
+  const size_t muscle_count = muscles->parts.size();
+  const size_t joint_count = static_cast<size_t>(skeleton.size());
+  // mass[m][j]: the weight of joint j under muscle m's share field, summed part by part, vertex by
+  // vertex and slot by slot, over the joints the muscle spans (the order of each sum is the order a
+  // muscle-by-muscle loop would take).
+  std::vector<double> mass(muscle_count * joint_count, 0.0);
+  std::vector<char> spans(muscle_count * joint_count, 0);
+  for (size_t m = 0; m < muscle_count; ++m)
+    for (int joint : spannedJoints(skeleton, muscles->parts[m])) spans[m * joint_count + static_cast<size_t>(joint)] = 1;
+  size_t p = 0;
+  for (const MeshPart& part : character.meshes) {
+    if (!part.skinned || part.positions.empty()) continue;
+    const MuscleShares& share = shares[p];
+    const std::vector<int>& weld = surfaces[p].weld_of_vertex;
+    ++p;
+    const int slots = part.influences_per_vertex;
+    for (size_t v = 0; v < part.positions.size(); ++v) {
+      const int w = weld[v];
+      for (std::uint32_t i = share.first[w]; i < share.first[w + 1]; ++i) {
+        const size_t m = static_cast<size_t>(share.muscle[i]);
+        const double s = share.share[i];
+        if (s <= 0.0 || muscles->parts[m].carrier >= 0) continue;
         for (int k = 0; k < slots; ++k) {
-          const int joint = part.joints[v * slots + k];
-          if (spans[joint]) mass[joint] += s * part.weights[v * slots + k];
+          const size_t joint = static_cast<size_t>(part.joints[v * slots + k]);
+          if (spans[m * joint_count + joint]) mass[m * joint_count + joint] += s * part.weights[v * slots + k];
         }
       }
     }
+  }
+  for (size_t m = 0; m < muscle_count; ++m) {
+    MusclePart& muscle = muscles->parts[m];
+    if (muscle.carrier >= 0) continue;
     int best = muscle.origin.joint;
     double best_mass = 0.0;
-    for (int j = 0; j < skeleton.size(); ++j) {
-      if (mass[j] > best_mass) {
-        best_mass = mass[j];
-        best = j;
+    for (size_t j = 0; j < joint_count; ++j) {
+      if (mass[m * joint_count + j] > best_mass) {
+        best_mass = mass[m * joint_count + j];
+        best = static_cast<int>(j);
       }
     }
     muscle.carrier = best;
@@ -208,59 +283,69 @@ void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGr
 InfluenceSet addMuscleInfluences(const InfluenceSet& base, const SurfaceGraph& surface, const MuscleShares& shares,
                                  const MuscleSet& muscles, const std::vector<int>& muscle_joints,
                                  const MuscleWeightOptions& options) {
-  assert(muscle_joints.size() == muscles.parts.size() && shares.size() == muscles.parts.size());
+  assert(muscle_joints.size() == muscles.parts.size());
   const int vertex_count = base.vertexCount();
   const int muscle_count = static_cast<int>(muscles.parts.size());
 
-  std::vector<std::vector<std::pair<int, double>>> rows(vertex_count);
+  // Each vertex's row of (joint, weight), one after another; per vertex only its muscles are touched
+  // (the sums skip the others' zero shares, which add nothing).
+  std::vector<std::pair<int, double>> rows;
+  std::vector<std::uint32_t> first_of_row(static_cast<size_t>(vertex_count) + 1, 0);
+  std::vector<double> share_here(static_cast<size_t>(muscle_count), 0.0), taken(static_cast<size_t>(muscle_count), 0.0);
+  std::vector<int> order;
   int widest = 0;
   for (int v = 0; v < vertex_count; ++v) {
     const int weld = surface.weld_of_vertex[v];
+    const std::uint32_t shares_begin = shares.first[weld], shares_end = shares.first[weld + 1];
     // The strongest muscles here, as many as the influence budget leaves room for (ties: file order).
     int existing = 0;
     for (int k = 0; k < base.slots_per_vertex; ++k) existing += base.weights[v * base.slots_per_vertex + k] > 0.0;
-    std::vector<int> order;
-    for (int m = 0; m < muscle_count; ++m) {
-      if (shares[m][weld] > 0.0) order.push_back(m);
+    order.clear();
+    for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+      if (shares.share[i] > 0.0) order.push_back(static_cast<int>(i));
     }
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return shares[a][weld] > shares[b][weld]; });
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return shares.share[a] > shares.share[b]; });
     const size_t room = static_cast<size_t>(std::max(0, options.max_influences - existing));
-    std::vector<double> share_here(muscle_count, 0.0);
-    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[order[i]] = shares[order[i]][weld];
-    std::vector<double> taken(muscle_count, 0.0);
-    std::vector<std::pair<int, double>>& row = rows[v];
+    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[shares.muscle[order[i]]] = shares.share[order[i]];
+    const size_t row_begin = rows.size();
     for (int k = 0; k < base.slots_per_vertex; ++k) {
       const int joint = base.joints[v * base.slots_per_vertex + k];
       const double weight = base.weights[v * base.slots_per_vertex + k];
       if (weight <= 0.0) continue;
       // The muscles riding this joint share at most max_total_share of its weight here.
       double total = 0.0;
-      for (int m = 0; m < muscle_count; ++m) {
+      for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+        const int m = shares.muscle[i];
         if (muscles.parts[m].carrier == joint) total += share_here[m];
       }
       const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
       double given = 0.0;
-      for (int m = 0; m < muscle_count; ++m) {
+      for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+        const int m = shares.muscle[i];
         if (muscles.parts[m].carrier != joint || share_here[m] <= 0.0) continue;
         const double amount = weight * share_here[m] * limit;
         taken[m] += amount;
         given += amount;
       }
-      if (weight - given > 0.0) row.emplace_back(joint, weight - given);
+      if (weight - given > 0.0) rows.emplace_back(joint, weight - given);
     }
-    for (int m = 0; m < muscle_count; ++m) {
-      if (taken[m] > 0.0) row.emplace_back(muscle_joints[m], taken[m]);
+    for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+      const int m = shares.muscle[i];
+      if (taken[m] > 0.0) rows.emplace_back(muscle_joints[m], taken[m]);
+      share_here[m] = taken[m] = 0.0;
     }
-    widest = std::max(widest, static_cast<int>(row.size()));
+    widest = std::max(widest, static_cast<int>(rows.size() - row_begin));
+    first_of_row[static_cast<size_t>(v) + 1] = static_cast<std::uint32_t>(rows.size());
   }
   InfluenceSet result;
   result.slots_per_vertex = std::max(widest, base.slots_per_vertex);
   result.joints.assign(static_cast<size_t>(vertex_count) * result.slots_per_vertex, 0);
   result.weights.assign(result.joints.size(), 0.0);
   for (int v = 0; v < vertex_count; ++v) {
-    for (size_t k = 0; k < rows[v].size(); ++k) {
-      result.joints[v * result.slots_per_vertex + k] = rows[v][k].first;
-      result.weights[v * result.slots_per_vertex + k] = rows[v][k].second;
+    for (std::uint32_t i = first_of_row[v]; i < first_of_row[v + 1]; ++i) {
+      const size_t k = i - first_of_row[v];
+      result.joints[v * result.slots_per_vertex + k] = rows[i].first;
+      result.weights[v * result.slots_per_vertex + k] = rows[i].second;
     }
   }
   return result;

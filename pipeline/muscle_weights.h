@@ -5,10 +5,11 @@
 // docs/muscle-weights.md.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "anatomy/muscle_set.h"
-#include "formats/surface_graph.h"
+#include "pipeline/surface_graph.h"
 #include "pipeline/influences.h"
 
 namespace rigbake {
@@ -42,14 +43,22 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
 // The joints a muscle spans: the skeleton path from its origin joint to its insertion joint.
 std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part);
 
-// share[m][w]: how much of its carrier's weight muscle m may take at welded vertex w, before the
-// influence budget: peak_share * (1 - x^2)^2 * side, x = distance to the segment / radius, side the
-// smoothstep of facing (see MuscleWeightOptions), smoothed over the surface. A corrective's has the
-// blend factor (MuscleWeightOptions::corrective_blend_gain) in place of the side: its offset moves all
-// of the blended skin one way.
-using MuscleShares = std::vector<std::vector<double>>;
+// How much of its carrier's weight each muscle may take at each welded vertex, before the influence
+// budget: peak_share * (1 - x^2)^2 * side, x = distance to the segment / radius, side the smoothstep of
+// facing (see MuscleWeightOptions), smoothed over the surface. Only the shares above 0 are kept (a
+// muscle reaches a small part of the body): welded vertex w's are muscle[k] with share[k] for k in
+// [first[w], first[w + 1]), muscles ascending. A corrective's share has the blend factor
+// (MuscleWeightOptions::corrective_blend_gain) in place of the side: its offset moves all of the blended
+// skin one way.
+struct MuscleShares {
+  std::vector<std::uint32_t> first;  // welded vertices + 1
+  std::vector<int> muscle;
+  std::vector<double> share;
+};
+// Muscles on `threads` threads (pipeline/parallel.h); the same shares at any count.
 MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface,
-                          const MuscleSet& muscles, const std::vector<double>& radii, const MuscleWeightOptions& options = {});
+                          const MuscleSet& muscles, const std::vector<double>& radii, const MuscleWeightOptions& options = {},
+                          int threads = 1);
 
 // Each part's carrier: among the joints it spans, the one whose weight its share field covers most,
 // summed over every skinned mesh part (lowest joint index on a tie). A part whose carrier is already

@@ -31,28 +31,34 @@ size_t parallelChunkCount(size_t count, size_t grain) {
   return (count + grain - 1) / grain;
 }
 
-void parallelFor(int threads, size_t count, size_t grain,
-                 const std::function<void(size_t chunk, size_t begin, size_t end)>& body) {
+size_t parallelWorkerCount(int threads, size_t count, size_t grain) {
+  const size_t chunks = parallelChunkCount(count, grain);
+  if (chunks == 0) return 0;
+  return inside_parallel_body ? 1 : std::min<size_t>(static_cast<size_t>(resolveThreadCount(threads)), chunks);
+}
+
+void parallelForWorkers(int threads, size_t count, size_t grain,
+                        const std::function<void(size_t worker, size_t chunk, size_t begin, size_t end)>& body) {
   grain = std::max<size_t>(grain, 1);
   const size_t chunks = parallelChunkCount(count, grain);
   if (chunks == 0) return;
-  const size_t workers = inside_parallel_body ? 1 : std::min<size_t>(static_cast<size_t>(resolveThreadCount(threads)), chunks);
+  const size_t workers = parallelWorkerCount(threads, count, grain);
   if (workers <= 1) {
-    for (size_t c = 0; c < chunks; ++c) body(c, c * grain, std::min(count, (c + 1) * grain));
+    for (size_t c = 0; c < chunks; ++c) body(0, c, c * grain, std::min(count, (c + 1) * grain));
     return;
   }
   std::atomic<size_t> next{0};
   std::atomic<size_t> lowest_error{chunks};  // chunks above it need not run
   std::mutex error_mutex;
   std::exception_ptr error;
-  auto work = [&]() {
+  auto work = [&](size_t worker) {
     inside_parallel_body = true;
     // Chunks are claimed in index order and every chunk below the lowest that threw still runs, so the
     // exception kept is the one a serial loop would have stopped at.
     for (size_t c = next++; c < chunks; c = next++) {
       if (c > lowest_error) continue;
       try {
-        body(c, c * grain, std::min(count, (c + 1) * grain));
+        body(worker, c, c * grain, std::min(count, (c + 1) * grain));
       } catch (...) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (c < lowest_error) {
@@ -65,10 +71,15 @@ void parallelFor(int threads, size_t count, size_t grain,
   };
   std::vector<std::thread> pool;
   pool.reserve(workers - 1);
-  for (size_t t = 1; t < workers; ++t) pool.emplace_back(work);
-  work();
+  for (size_t t = 1; t < workers; ++t) pool.emplace_back(work, t);
+  work(0);
   for (std::thread& thread : pool) thread.join();
   if (error) std::rethrow_exception(error);
+}
+
+void parallelFor(int threads, size_t count, size_t grain,
+                 const std::function<void(size_t chunk, size_t begin, size_t end)>& body) {
+  parallelForWorkers(threads, count, grain, [&](size_t, size_t chunk, size_t begin, size_t end) { body(chunk, begin, end); });
 }
 
 void parallelForEach(int threads, size_t count, const std::function<void(size_t index)>& body) {

@@ -24,6 +24,16 @@ size_t parallelChunkCount(size_t count, size_t grain);
 void parallelFor(int threads, size_t count, size_t grain,
                  const std::function<void(size_t chunk, size_t begin, size_t end)>& body);
 
+// How many threads parallelFor() and parallelForWorkers() run [0, count) on: at most one per chunk,
+// and 1 inside a parallel body.
+size_t parallelWorkerCount(int threads, size_t count, size_t grain);
+
+// parallelFor whose body also gets the index of the worker running it (below parallelWorkerCount()),
+// so that each worker can keep scratch memory from chunk to chunk instead of allocating per chunk.
+// Which worker runs a chunk varies from run to run: what a chunk writes must not depend on it.
+void parallelForWorkers(int threads, size_t count, size_t grain,
+                        const std::function<void(size_t worker, size_t chunk, size_t begin, size_t end)>& body);
+
 // parallelFor with one item per chunk: body(i) for every i in [0, count).
 void parallelForEach(int threads, size_t count, const std::function<void(size_t index)>& body);
 

@@ -38,6 +38,8 @@
 #include <limits>
 #include <numeric>
 
+#include <emmintrin.h>
+
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 
@@ -51,8 +53,10 @@ struct RoundingSlot {
   int units = 0;
 };
 
-void writeCanonical(std::vector<RoundingSlot> slots, int slots_per_vertex, int vertex, QuantizedInfluences* out) {
-  std::sort(slots.begin(), slots.end(), [](const RoundingSlot& a, const RoundingSlot& b) {
+// `slots` holds slots_per_vertex entries (sorted here). A vertex's joints are distinct, so the order
+// sorted into is the only one there is, whatever the sort.
+void writeCanonical(RoundingSlot* slots, int slots_per_vertex, int vertex, QuantizedInfluences* out) {
+  std::sort(slots, slots + slots_per_vertex, [](const RoundingSlot& a, const RoundingSlot& b) {
     if ((a.units == 0) != (b.units == 0)) return a.units != 0;
     if (a.units != b.units) return a.units > b.units;
     return a.joint < b.joint;
@@ -187,7 +191,7 @@ void writeUnits(const VertexMotion& motion, const std::vector<int>& units, int s
                 QuantizedInfluences* out) {
   std::vector<RoundingSlot> chosen(slots);
   for (size_t i = 0; i < units.size(); ++i) chosen[i] = RoundingSlot{motion.joints[i], units[i]};
-  writeCanonical(chosen, slots, v, out);
+  writeCanonical(chosen.data(), slots, v, out);
 }
 
 // Pass 2 for one vertex: the candidate with the smallest worst frame, if strictly better than pass 1's
@@ -262,9 +266,14 @@ void motionCandidates(const MotionShares& shares, std::vector<unsigned>* masks) 
   const int n = shares.n;
   std::array<int, kMomentJoints> order{};
   std::iota(order.begin(), order.begin() + n, 0);
-  std::stable_sort(order.begin(), order.begin() + n, [&](int a, int b) {
-    return shares.exact[a] - shares.floor_units[a] > shares.exact[b] - shares.floor_units[b];
-  });
+  // Insertion sort: stable like std::stable_sort (so the same order) without its heap buffer.
+  auto greater = [&](int a, int b) { return shares.exact[a] - shares.floor_units[a] > shares.exact[b] - shares.floor_units[b]; };
+  for (int i = 1; i < n; ++i) {
+    const int value = order[i];
+    int j = i;
+    for (; j > 0 && greater(value, order[j - 1]); --j) order[j] = order[j - 1];
+    order[j] = value;
+  }
   unsigned largest_remainder = 0;
   for (int i = 0; i < shares.missing; ++i) largest_remainder |= 1u << order[i];
   unsigned integral = 0;  // shares already on an integer cannot round up
@@ -295,39 +304,80 @@ std::uint64_t tripleKey(int first, int i, int j) {
   return (static_cast<std::uint64_t>(first) << 42) | (static_cast<std::uint64_t>(i) << 21) | static_cast<std::uint64_t>(j);
 }
 
-TripleMoment tripleMoment(std::uint64_t key, const std::vector<SkinFrame>& frames) {
-  const int first = static_cast<int>(key >> 42), i = static_cast<int>((key >> 21) & 0x1fffff),
-            j = static_cast<int>(key & 0x1fffff);
-  TripleMoment moment;
+// The moments of the triples keys[begin, end), which share their first joint. Per frame each joint's
+// difference from the first, D_k = M_k - M_first (3x4, by rows), is formed once for all the triples
+// that use it, and each triple adds D_i^T D_j (4x4) row by row, two columns per SSE2 register; the
+// symmetric part is taken at the end. The sums round differently from adding each entry's three
+// products per frame, by the same order of magnitude (1e-16 of their terms), far inside the 1e-9 the
+// comparisons allow for (momentMask()).
+void tripleMoments(const std::vector<std::uint64_t>& keys, size_t begin, size_t end, const std::vector<SkinFrame>& frames,
+                   std::vector<TripleMoment>* out) {
+  const int first = static_cast<int>(keys[begin] >> 42);
+  std::vector<int> joints;  // the i and j of the run, ascending
+  for (size_t k = begin; k < end; ++k) {
+    joints.push_back(static_cast<int>((keys[k] >> 21) & 0x1fffff));
+    joints.push_back(static_cast<int>(keys[k] & 0x1fffff));
+  }
+  std::sort(joints.begin(), joints.end());
+  joints.erase(std::unique(joints.begin(), joints.end()), joints.end());
+  auto slotOf = [&](int joint) { return static_cast<size_t>(std::lower_bound(joints.begin(), joints.end(), joint) - joints.begin()); };
+  std::vector<std::pair<size_t, size_t>> pairs;  // per triple: the slots of i and j
+  for (size_t k = begin; k < end; ++k)
+    pairs.emplace_back(slotOf(static_cast<int>((keys[k] >> 21) & 0x1fffff)), slotOf(static_cast<int>(keys[k] & 0x1fffff)));
+  std::vector<double> rows(12 * joints.size());  // D_k by rows: rows[12 k + 4 r + c]
+  std::vector<char> moves(joints.size(), 0);       // D_k != 0 at some frame
+  // Per triple, sum_t D_i^T D_j by rows, two columns per register.
+  struct alignas(16) Pair {
+    double v[2];
+  };
+  std::vector<Pair> product(8 * (end - begin), Pair{{0.0, 0.0}});
   for (const SkinFrame& frame : frames) {
     const double* m0 = frame[first].data();
-    const double* mi = frame[i].data();
-    const double* mj = frame[j].data();
-    double di[3][4], dj[3][4];  // rows of the 3x4 differences (column-major 4x4 sources)
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 4; ++c) {
-        di[r][c] = mi[4 * c + r] - m0[4 * c + r];
-        dj[r][c] = mj[4 * c + r] - m0[4 * c + r];
-      }
-    }
-    int at = 0;
-    for (int p = 0; p < 4; ++p) {
-      for (int q = p; q < 4; ++q) {
-        double sum = 0.0;
-        for (int r = 0; r < 3; ++r) sum += di[r][p] * dj[r][q] + (p == q ? 0.0 : di[r][q] * dj[r][p]);
-        moment.c[at++] += sum;
-      }
-    }
-    if (i == j) {
+    for (size_t k = 0; k < joints.size(); ++k) {
+      const double* mk = frame[joints[k]].data();
+      double* d = &rows[12 * k];
       for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 4; ++c) {
-          moment.scale += di[r][c] * di[r][c];
-          if (di[r][c] != 0.0) moment.zero = false;
+          d[4 * r + c] = mk[4 * c + r] - m0[4 * c + r];
+          moves[k] |= d[4 * r + c] != 0.0;
         }
       }
     }
+    for (size_t t = 0; t < pairs.size(); ++t) {
+      const double* di = &rows[12 * pairs[t].first];
+      const double* dj = &rows[12 * pairs[t].second];
+      __m128d p[8];
+      for (int k = 0; k < 8; ++k) p[k] = _mm_load_pd(product[8 * t + static_cast<size_t>(k)].v);
+      for (int r = 0; r < 3; ++r) {
+        const __m128d low = _mm_loadu_pd(dj + 4 * r), high = _mm_loadu_pd(dj + 4 * r + 2);
+        for (int q = 0; q < 4; ++q) {
+          const __m128d a = _mm_set1_pd(di[4 * r + q]);
+          p[2 * q] = _mm_add_pd(p[2 * q], _mm_mul_pd(a, low));
+          p[2 * q + 1] = _mm_add_pd(p[2 * q + 1], _mm_mul_pd(a, high));
+        }
+      }
+      for (int k = 0; k < 8; ++k) _mm_store_pd(product[8 * t + static_cast<size_t>(k)].v, p[k]);
+    }
   }
-  return moment;
+  for (size_t t = 0; t < pairs.size(); ++t) {
+    double full[4][4];
+    for (int q = 0; q < 4; ++q) {
+      const Pair& low = product[8 * t + 2 * static_cast<size_t>(q)];
+      const Pair& high = product[8 * t + 2 * static_cast<size_t>(q) + 1];
+      full[q][0] = low.v[0];
+      full[q][1] = low.v[1];
+      full[q][2] = high.v[0];
+      full[q][3] = high.v[1];
+    }
+    TripleMoment& moment = (*out)[begin + t];
+    int at = 0;
+    for (int a = 0; a < 4; ++a)
+      for (int b = a; b < 4; ++b) moment.c[at++] = a == b ? full[a][a] : full[a][b] + full[b][a];
+    if (pairs[t].first == pairs[t].second) {
+      moment.scale = full[0][0] + full[1][1] + full[2][2] + full[3][3];
+      moment.zero = !moves[pairs[t].first];
+    }
+  }
 }
 
 double momentForm(const TripleMoment& moment, const Eigen::Vector3d& v) {
@@ -353,20 +403,27 @@ struct MomentTable {
 
 constexpr size_t kVertexGrain = 2048;
 
-MomentTable momentTable(const InfluenceSet& set, const std::vector<SkinFrame>& frames, int threads) {
-  const size_t vertices = static_cast<size_t>(set.vertexCount());
-  std::vector<std::vector<std::uint64_t>> chunk_keys(parallelChunkCount(vertices, kVertexGrain));
-  parallelFor(threads, vertices, kVertexGrain, [&](size_t chunk, size_t begin, size_t end) {
-    std::vector<std::uint64_t>& keys = chunk_keys[chunk];
-    for (size_t v = begin; v < end; ++v) {
-      const MotionShares shares = motionShares(set, static_cast<int>(v));
-      if (shares.tooMany || !shares.choice()) continue;
-      for (int i = 1; i < shares.n; ++i)
-        for (int j = i; j < shares.n; ++j) keys.push_back(tripleKey(shares.joints[0], shares.joints[i], shares.joints[j]));
-    }
-    std::sort(keys.begin(), keys.end());
-    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  });
+// The moments of every triple the vertices with a choice use, in every part (one table: parts share
+// most of their joints' triples).
+MomentTable momentTable(const std::vector<MotionPart>& parts, const std::vector<SkinFrame>& frames, int threads) {
+  std::vector<std::vector<std::uint64_t>> chunk_keys;
+  for (const MotionPart& part : parts) {
+    const InfluenceSet& set = *part.set;
+    const size_t vertices = static_cast<size_t>(set.vertexCount());
+    std::vector<std::vector<std::uint64_t>> part_keys(parallelChunkCount(vertices, kVertexGrain));
+    parallelFor(threads, vertices, kVertexGrain, [&](size_t chunk, size_t begin, size_t end) {
+      std::vector<std::uint64_t>& keys = part_keys[chunk];
+      for (size_t v = begin; v < end; ++v) {
+        const MotionShares shares = motionShares(set, static_cast<int>(v));
+        if (shares.tooMany || !shares.choice()) continue;
+        for (int i = 1; i < shares.n; ++i)
+          for (int j = i; j < shares.n; ++j) keys.push_back(tripleKey(shares.joints[0], shares.joints[i], shares.joints[j]));
+      }
+      std::sort(keys.begin(), keys.end());
+      keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    });
+    for (std::vector<std::uint64_t>& keys : part_keys) chunk_keys.push_back(std::move(keys));
+  }
   MomentTable table;
   for (std::vector<std::uint64_t>& keys : chunk_keys) {
     std::vector<std::uint64_t> merged;
@@ -376,28 +433,56 @@ MomentTable momentTable(const InfluenceSet& set, const std::vector<SkinFrame>& f
     std::vector<std::uint64_t>().swap(keys);
   }
   table.moments.resize(table.keys.size());
-  parallelFor(threads, table.keys.size(), 64, [&](size_t, size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) table.moments[k] = tripleMoment(table.keys[k], frames);
-  });
+  // Runs of one first joint, at most kTriplesPerRun long so that the threads share the work.
+  constexpr size_t kTriplesPerRun = 256;
+  std::vector<std::pair<size_t, size_t>> runs;
+  for (size_t begin = 0; begin < table.keys.size();) {
+    size_t end = begin + 1;
+    while (end < table.keys.size() && end - begin < kTriplesPerRun && (table.keys[end] >> 42) == (table.keys[begin] >> 42)) ++end;
+    runs.emplace_back(begin, end);
+    begin = end;
+  }
+  parallelForEach(threads, runs.size(), [&](size_t r) { tripleMoments(table.keys, runs[r].first, runs[r].second, frames, &table.moments); });
   return table;
 }
 
+// The moments of a vertex's triples, found once for a run of vertices with the same joints (a mesh's
+// neighbouring vertices usually share them): [i][j] for 1 <= i <= j < n.
+struct TripleLookup {
+  int n = 0;
+  std::array<int, kMomentJoints> joints{};
+  const TripleMoment* moment[kMomentJoints][kMomentJoints] = {};
+  void find(const MotionShares& shares, const MomentTable& table) {
+    if (n == shares.n && std::equal(joints.begin(), joints.begin() + n, shares.joints.begin())) return;
+    n = shares.n;
+    std::copy(shares.joints.begin(), shares.joints.begin() + n, joints.begin());
+    for (int i = 1; i < n; ++i)
+      for (int j = i; j < n; ++j) moment[i][j] = &table.at(joints[0], joints[i], joints[j]);
+  }
+};
+
 // Pass 1 from the moments: the mask leastSquaresMask() would choose, or false when a comparison it
 // makes comes too close to call with the moments' roundings (then the caller costs the vertex frame by
-// frame). *cost gets the chosen candidate's error summed in squares (in thousandths squared) and
-// *cost_error how far that figure may be off.
+// frame; `masks` then holds the candidates). *cost gets the chosen candidate's error summed in squares
+// (in thousandths squared) and *cost_error how far that figure may be off.
+//
+// A candidate is the rounding-down error f (f_i = floor_i - exact_i) plus its mask b, so its cost is
+// e^T G e = f^T G f + 2 b . (G f) + b^T G b: with f^T G f and G f formed once per vertex, a candidate
+// that rounds k shares up costs k^2 operations instead of n^2.
 bool momentMask(const MotionShares& shares, const Eigen::Vector3d& position, const MomentTable& table,
-                std::vector<unsigned>* masks, unsigned* chosen, double* cost, double* cost_error) {
+                TripleLookup* lookup, std::vector<unsigned>* masks, unsigned* chosen, double* cost, double* cost_error) {
   const int n = shares.n;
   double gram[kMomentJoints][kMomentJoints];
   double magnitude[kMomentJoints];  // sqrt of G_ii plus what the form may have cancelled
   bool zero[kMomentJoints];         // d_i(t) == 0 at every frame: row and column i of G vanish
   const double x2 = position.squaredNorm() + 1.0;
+  lookup->find(shares, table);
+  for (int j = 0; j < n; ++j) gram[0][j] = gram[j][0] = 0.0;  // d_0 = 0
   magnitude[0] = 0.0;
-  zero[0] = true;  // d_0 = 0
+  zero[0] = true;
   for (int i = 1; i < n; ++i) {
     for (int j = i; j < n; ++j) {
-      const TripleMoment& moment = table.at(shares.joints[0], shares.joints[i], shares.joints[j]);
+      const TripleMoment& moment = *lookup->moment[i][j];
       gram[i][j] = gram[j][i] = momentForm(moment, position);
       if (i == j) {
         magnitude[i] = std::sqrt(std::max(gram[i][i], 0.0) + 1e-6 * moment.scale * x2);
@@ -405,60 +490,62 @@ bool momentMask(const MotionShares& shares, const Eigen::Vector3d& position, con
       }
     }
   }
-  double total_magnitude = 0.0;
-  for (int i = 1; i < n; ++i) total_magnitude += magnitude[i];
-  double error[kMomentJoints];
-  // e^T G e, and sum_ij |e_i G_ij e_j|: what its roundings are relative to.
-  auto costOf = [&](unsigned mask, double* terms) {
-    for (int i = 0; i < n; ++i) error[i] = shares.floor_units[i] + ((mask >> i) & 1u) - shares.exact[i];
-    double sum = 0.0, size = 0.0;
-    for (int i = 1; i < n; ++i) {
-      double row = gram[i][i] * error[i], row_size = std::abs(gram[i][i] * error[i]);
-      for (int j = i + 1; j < n; ++j) {
-        row += 2.0 * gram[i][j] * error[j];
-        row_size += 2.0 * std::abs(gram[i][j] * error[j]);
-      }
-      sum += error[i] * row;
-      size += std::abs(error[i]) * row_size;
+  double total_magnitude = 0.0, size = 0.0;  // size: sum_ij |G_ij|, which bounds every cost's terms
+  double round_down[kMomentJoints], pull[kMomentJoints];
+  for (int i = 0; i < n; ++i) round_down[i] = shares.floor_units[i] - shares.exact[i];
+  double base = 0.0;
+  for (int i = 1; i < n; ++i) {
+    total_magnitude += magnitude[i];
+    pull[i] = 0.0;
+    for (int j = 1; j < n; ++j) {
+      pull[i] += gram[i][j] * round_down[j];
+      size += std::abs(gram[i][j]);
     }
-    *terms = size;
-    return sum;
+    base += round_down[i] * pull[i];
+  }
+  pull[0] = 0.0;
+  auto costOf = [&](unsigned mask) {
+    double linear = 0.0, quadratic = 0.0;
+    for (unsigned rest = mask; rest != 0; rest &= rest - 1) {
+      const int i = __builtin_ctz(rest);
+      linear += pull[i];
+      for (unsigned other = mask; other != 0; other &= other - 1) quadratic += gram[i][__builtin_ctz(other)];
+    }
+    return base + 2.0 * linear + quadratic;
   };
   motionCandidates(shares, masks);
   unsigned best = masks->front();
-  double best_terms = 0.0;
-  double best_cost = costOf(best, &best_terms);
+  double best_cost = costOf(best);
   const double tolerance = 1e-12 * std::max(1.0, best_cost);
-  // A cost's rounding error is within n * unit roundoff of its terms, both in the reference's
-  // evaluation and here: 4 n DBL_EPSILON covers the two with a factor of 4 to spare.
-  const double gamma = 4.0 * n * std::numeric_limits<double>::epsilon();
+  // Each |e_i| < 1, so every cost's terms sum to at most `size`: the reference's evaluation rounds by at
+  // most (n + 1) units of roundoff of that, and this one (f^T G f, G f, the sums over the mask) by at
+  // most (n + 1)^2 + 12 n + 12; 16 (n + 1)^2 units cover both.
+  const double rounding = 16.0 * (n + 1) * (n + 1) * std::numeric_limits<double>::epsilon() * size;
   for (unsigned mask : *masks) {
     if (mask == best) continue;
     double differing = 0.0;
     bool moves = false;
-    for (int i = 0; i < n; ++i) {
-      if (!(((mask ^ best) >> i) & 1u)) continue;
+    for (unsigned rest = mask ^ best; rest != 0; rest &= rest - 1) {
+      const int i = __builtin_ctz(rest);
       differing += magnitude[i];
       moves |= !zero[i];
     }
     // Candidates that differ only where G's rows vanish have bit-identical costs in the reference
     // (the terms they change are products with zeros): never better.
     if (!moves) continue;
-    double terms = 0.0;
-    const double c = costOf(mask, &terms);
+    const double c = costOf(mask);
     // The moments differ from the frame-by-frame sums by far less than 1e-9 of the terms they cancel
     // (typically 1e-14); only the rows of the joints the two candidates differ in change the difference.
     const double margin = c - (best_cost - tolerance);
-    if (std::abs(margin) <= 1e-9 * differing * total_magnitude + gamma * (terms + best_terms)) return false;
+    if (std::abs(margin) <= 1e-9 * differing * total_magnitude + rounding) return false;
     if (margin < 0.0) {
       best_cost = c;
       best = mask;
-      best_terms = terms;
     }
   }
   *chosen = best;
   *cost = best_cost;
-  *cost_error = 1e-9 * total_magnitude * total_magnitude + gamma * best_terms;
+  *cost_error = 1e-9 * total_magnitude * total_magnitude + rounding;
   return true;
 }
 
@@ -486,11 +573,80 @@ double skinReach(const std::vector<SkinFrame>& frames) {
   return reach * (1.0 + 1e-9);
 }
 
-void writeMotionUnits(const MotionShares& shares, unsigned mask, int slots, int v, QuantizedInfluences* out) {
-  std::vector<RoundingSlot> chosen(slots);
+void writeMotionUnits(const MotionShares& shares, unsigned mask, int slots, int v, std::vector<RoundingSlot>* chosen,
+                      QuantizedInfluences* out) {
+  chosen->assign(static_cast<size_t>(slots), RoundingSlot{});
   for (int i = 0; i < shares.n; ++i)
-    chosen[i] = RoundingSlot{shares.joints[i], shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)};
-  writeCanonical(chosen, slots, v, out);
+    (*chosen)[i] = RoundingSlot{shares.joints[i], shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)};
+  writeCanonical(chosen->data(), slots, v, out);
+}
+
+// What a vertex costed frame by frame reuses from vertex to vertex.
+struct FrameByFrameScratch {
+  Eigen::MatrixXd gram;
+  Eigen::VectorXd error, product;
+  std::vector<Eigen::Vector3d> moved;  // frame-major, as VertexMotion::moved
+  std::vector<RoundingSlot> chosen;
+};
+
+// leastSquaresMask() for the shares, with the candidates `masks` (motionCandidates()), skinning the
+// vertex frame by frame as vertexMotion() does but without storing the skinned positions: each Gram
+// entry adds the same products in the same order, and each candidate's cost is the same Eigen
+// expression on the same matrix (the product into a kept vector instead of a temporary: the same
+// kernel), so the same mask to the bit, without allocating per frame or per candidate. It is what the
+// moments leave too close to call: candidates whose costs tie, e.g. a muscle that never responds and so
+// moves its skin exactly as its carrier does.
+unsigned frameByFrameMask(const MotionShares& shares, const Eigen::Vector3d& position, const std::vector<SkinFrame>& frames,
+                          const std::vector<unsigned>& masks, FrameByFrameScratch* scratch) {
+  const int n = shares.n;
+  double gram[kMomentJoints][kMomentJoints] = {};
+  scratch->moved.resize(frames.size() * static_cast<size_t>(n));
+  for (size_t t = 0; t < frames.size(); ++t) {
+    Eigen::Vector3d* moved = &scratch->moved[t * static_cast<size_t>(n)];
+    for (int i = 0; i < n; ++i) moved[i] = transformPoint(frames[t][shares.joints[i]], position);
+    for (int i = 1; i < n; ++i) {
+      const Eigen::Vector3d di = moved[i] - moved[0];
+      for (int j = i; j < n; ++j) gram[i][j] += di.dot(moved[j] - moved[0]);
+    }
+  }
+  Eigen::MatrixXd& matrix = scratch->gram;
+  matrix.setZero(n, n);
+  for (int i = 1; i < n; ++i)
+    for (int j = i; j < n; ++j) matrix(i, j) = matrix(j, i) = gram[i][j];
+  Eigen::VectorXd& error = scratch->error;
+  Eigen::VectorXd& product = scratch->product;
+  error.resize(n);
+  auto cost = [&](unsigned mask) {
+    for (int i = 0; i < n; ++i) error[i] = shares.floor_units[i] + ((mask >> i) & 1u) - shares.exact[i];
+    product.noalias() = matrix * error;
+    return error.dot(product);
+  };
+  unsigned best = masks.front();
+  double best_cost = cost(best);
+  const double tolerance = 1e-12 * std::max(1.0, best_cost);
+  for (unsigned mask : masks) {
+    const double c = cost(mask);
+    if (c < best_cost - tolerance) {
+      best_cost = c;
+      best = mask;
+    }
+  }
+  return best;
+}
+
+// motionWorstFrame() from the positions frameByFrameMask() kept (the same values, so the same bits).
+double keptWorstFrame(const MotionShares& shares, unsigned mask, const FrameByFrameScratch& scratch) {
+  double worst = 0.0;
+  double factor[kMomentJoints];
+  for (int i = 0; i < shares.n; ++i)
+    factor[i] = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+  const size_t n = static_cast<size_t>(shares.n);
+  for (size_t at = 0; at < scratch.moved.size(); at += n) {
+    Eigen::Vector3d error = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < n; ++i) error += factor[i] * scratch.moved[at + i];
+    worst = std::max(worst, error.norm() / kMilliScale);
+  }
+  return worst;
 }
 
 }  // namespace
@@ -527,11 +683,16 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
 
 QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                       const std::vector<SkinFrame>& frames, int threads) {
+  return std::move(quantizeForMotion({MotionPart{&set, &bind_positions}}, frames, threads).front());
+}
+
+namespace {
+
+QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                                 const std::vector<SkinFrame>& frames, const MomentTable& table, int threads) {
   QuantizedInfluences out = quantizeInfluences(set, kMilliScale);
-  if (frames.empty()) return out;
   const int slots = set.slots_per_vertex;
   const size_t vertex_count = static_cast<size_t>(set.vertexCount());
-  const MomentTable table = momentTable(set, frames, threads);
 
   // Pass 1. `worst` is exact where `known`; elsewhere `bound` bounds it from above.
   std::vector<double> worst(vertex_count, 0.0), bound(vertex_count, 0.0);
@@ -543,6 +704,8 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
   const double skin_reach = skinReach(frames);
   parallelFor(threads, vertex_count, kVertexGrain, [&](size_t chunk, size_t begin, size_t end) {
     std::vector<unsigned> masks;
+    TripleLookup lookup;
+    FrameByFrameScratch frame_by_frame;
     double lowest_worst = 0.0;
     for (size_t v = begin; v < end; ++v) {
       const int vertex = static_cast<int>(v);
@@ -550,7 +713,16 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
       if (!shares.tooMany && !shares.choice()) continue;
       unsigned mask = 0;
       double cost = 0.0, cost_error = 0.0;
-      if (shares.tooMany || !momentMask(shares, bind_positions[v], table, &masks, &mask, &cost, &cost_error)) {
+      if (!shares.tooMany && !momentMask(shares, bind_positions[v], table, &lookup, &masks, &mask, &cost, &cost_error)) {
+        // momentMask() left `masks` holding the candidates.
+        mask = frameByFrameMask(shares, bind_positions[v], frames, masks, &frame_by_frame);
+        chosen[v] = mask;
+        worst[v] = keptWorstFrame(shares, mask, frame_by_frame);
+        writeMotionUnits(shares, mask, slots, vertex, &frame_by_frame.chosen, &out);
+        lowest_worst = std::max(lowest_worst, worst[v]);
+        continue;
+      }
+      if (shares.tooMany) {
         const VertexMotion motion = vertexMotion(set, vertex, bind_positions[v], frames);
         if (!hasChoice(motion)) continue;
         const std::vector<int> units = unitsOf(motion, leastSquaresMask(motion, candidateMasks(motion)));
@@ -560,7 +732,7 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
         continue;
       }
       chosen[v] = mask;
-      writeMotionUnits(shares, mask, slots, vertex, &out);
+      writeMotionUnits(shares, mask, slots, vertex, &frame_by_frame.chosen, &out);
       // |r(t)| <= |sum_i e_i d_i(t)| + |sum_i e_i| |M_0(t) v|: the second term is rounding only.
       double sum_error = 0.0, largest = 0.0;
       for (int i = 0; i < shares.n; ++i) {
@@ -608,6 +780,20 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
     const int v = refine[r];
     refineVertex(set, v, bind_positions[v], frames, worst[v], &out);
   });
+  return out;
+}
+
+}  // namespace
+
+std::vector<QuantizedInfluences> quantizeForMotion(const std::vector<MotionPart>& parts, const std::vector<SkinFrame>& frames,
+                                                   int threads) {
+  std::vector<QuantizedInfluences> out;
+  if (frames.empty()) {
+    for (const MotionPart& part : parts) out.push_back(quantizeInfluences(*part.set, kMilliScale));
+    return out;
+  }
+  const MomentTable table = momentTable(parts, frames, threads);
+  for (const MotionPart& part : parts) out.push_back(quantizePart(*part.set, *part.bind_positions, frames, table, threads));
   return out;
 }
 

@@ -24,6 +24,15 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
 QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                       const std::vector<SkinFrame>& frames, int threads);
 
+// quantizeForMotion() of several mesh parts skinned by the same frames, in `parts` order: the same
+// roundings as one call per part, with the moments of the joints the parts share summed once.
+struct MotionPart {
+  const InfluenceSet* set = nullptr;
+  const std::vector<Eigen::Vector3d>* bind_positions = nullptr;
+};
+std::vector<QuantizedInfluences> quantizeForMotion(const std::vector<MotionPart>& parts, const std::vector<SkinFrame>& frames,
+                                                   int threads);
+
 // The same roundings computed the direct way, frame by frame for every vertex (slow: O(frames n^2) per
 // vertex). quantizeForMotion() must give exactly these; the tests compare the two.
 QuantizedInfluences quantizeForMotionReference(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,

@@ -3,7 +3,11 @@
 // ICIP 2001), openings closed by centroid fans; its gradient is the same sum differentiated per vertex.
 #include "pipeline/skin_volume.h"
 
+#include "pipeline/weld.h"
+
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <cmath>
 #include <map>
 #include <tuple>
@@ -15,24 +19,7 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
   const int vertex_count = static_cast<int>(part.positions.size());
   surface.weld_of_vertex.assign(vertex_count, -1);
   // Vertices in the same cell weld; welded vertices are numbered in the order of their first vertex.
-  // Sorted cells rather than a tree of them: the same numbering, without an allocation per vertex.
-  struct Cell {
-    long long x, y, z;
-    int vertex;
-    bool operator<(const Cell& o) const { return std::tie(x, y, z, vertex) < std::tie(o.x, o.y, o.z, o.vertex); }
-    bool sameCell(const Cell& o) const { return x == o.x && y == o.y && z == o.z; }
-  };
-  std::vector<Cell> cells(static_cast<size_t>(vertex_count));
-  for (int v = 0; v < vertex_count; ++v) {
-    const Eigen::Vector3d& p = part.positions[v];
-    cells[v] = {std::llround(p.x() / weld_tolerance), std::llround(p.y() / weld_tolerance), std::llround(p.z() / weld_tolerance), v};
-  }
-  std::sort(cells.begin(), cells.end());
-  std::vector<int> first_of_vertex(static_cast<size_t>(vertex_count));  // the first vertex of its cell
-  for (size_t i = 0, group = 0; i < cells.size(); ++i) {
-    if (i > 0 && !cells[i].sameCell(cells[i - 1])) group = i;
-    first_of_vertex[cells[i].vertex] = cells[group].vertex;
-  }
+  const std::vector<int> first_of_vertex = firstVertexOfCell(part.positions, weld_tolerance);
   for (int v = 0; v < vertex_count; ++v) {
     const int first = first_of_vertex[v];
     if (first == v) {
@@ -58,50 +45,61 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
 
 ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles) {
   ClosedPatch patch;
-  // Directed edges, sorted: a boundary edge is used once and its reverse never.
-  std::vector<std::pair<int, int>> directed;
-  directed.reserve(3 * triangles.size());
-  for (int index : triangles) {
-    const std::array<int, 3>& w = surface.whole.triangles[index];
-    patch.triangles.push_back(w);
-    for (int k = 0; k < 3; ++k) directed.emplace_back(w[k], w[(k + 1) % 3]);
+  patch.triangles.reserve(triangles.size());
+  for (int index : triangles) patch.triangles.push_back(surface.whole.triangles[index]);
+  // Directed edges a->b grouped by a, each group sorted (the order of the pairs (a, b), with a count
+  // of each vertex's edges instead of a sort of all of them): a boundary edge is used once and its
+  // reverse never.
+  const size_t vertex_count = static_cast<size_t>(surface.weldedCount());
+  std::vector<std::uint32_t> first(vertex_count + 1, 0);
+  for (const auto& w : patch.triangles)
+    for (int k = 0; k < 3; ++k) ++first[static_cast<size_t>(w[k]) + 1];
+  for (size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
+  std::vector<int> targets(first.back());
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (const auto& w : patch.triangles)
+      for (int k = 0; k < 3; ++k) targets[fill[w[k]]++] = w[(k + 1) % 3];
   }
-  std::sort(directed.begin(), directed.end());
+  for (size_t v = 0; v < vertex_count; ++v) std::sort(targets.begin() + first[v], targets.begin() + first[v + 1]);
+  auto hasEdge = [&](int a, int b) {
+    return std::binary_search(targets.begin() + first[a], targets.begin() + first[a + 1], b);
+  };
   // A hole's loop runs against the triangles' winding (the boundary edge a->b of a triangle is b->a on
   // the cap), so caps face outwards like the surface. Loops start at their smallest unused edge, which
-  // makes the result independent of everything but the triangles.
-  std::map<int, std::vector<int>> next_on_boundary;
-  for (size_t i = 0; i < directed.size(); ++i) {
-    const std::pair<int, int>& edge = directed[i];
-    const bool once = (i == 0 || directed[i - 1] != edge) && (i + 1 == directed.size() || directed[i + 1] != edge);
-    if (once && !std::binary_search(directed.begin(), directed.end(), std::make_pair(edge.second, edge.first)))
-      next_on_boundary[edge.second].push_back(edge.first);
-  }
-  std::map<std::pair<int, int>, bool> used;
-  for (const auto& [start, targets] : next_on_boundary) {
-    for (int first_target : targets) {
-      if (used[{start, first_target}]) continue;
-      std::vector<int> loop = {start};
-      int from = start, to = first_target;
-      used[{from, to}] = true;
-      while (to != start) {
-        loop.push_back(to);
-        auto it = next_on_boundary.find(to);
-        if (it == next_on_boundary.end()) break;  // an open chain (non-manifold): cap what there is
-        int chosen = -1;
-        for (int candidate : it->second) {
-          if (!used[{to, candidate}]) {
-            chosen = candidate;
-            break;
-          }
-        }
-        if (chosen < 0) break;
-        from = to;
-        to = chosen;
-        used[{from, to}] = true;
-      }
-      if (loop.size() >= 3) patch.holes.push_back(std::move(loop));
+  // makes the result independent of everything but the triangles. The boundary's steps b->a, sorted,
+  // are each start's targets in ascending order (a sorted list and flags instead of a map of vectors
+  // and a map of flags: the same steps in the same order).
+  std::vector<std::pair<int, int>> steps;  // (from, to)
+  for (size_t a = 0; a < vertex_count; ++a) {
+    for (std::uint32_t i = first[a]; i < first[a + 1]; ++i) {
+      const int b = targets[i];
+      const bool once = (i == first[a] || targets[i - 1] != b) && (i + 1 == first[a + 1] || targets[i + 1] != b);
+      if (once && !hasEdge(b, static_cast<int>(a))) steps.emplace_back(b, static_cast<int>(a));
     }
+  }
+  std::sort(steps.begin(), steps.end());
+  std::vector<char> used(steps.size(), 0);
+  auto firstStepFrom = [&](int from) {
+    return static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(from, std::numeric_limits<int>::min())) -
+                               steps.begin());
+  };
+  for (size_t start_step = 0; start_step < steps.size(); ++start_step) {
+    if (used[start_step]) continue;
+    const int start = steps[start_step].first;
+    std::vector<int> loop = {start};
+    int to = steps[start_step].second;
+    used[start_step] = 1;
+    while (to != start) {
+      loop.push_back(to);
+      size_t step = firstStepFrom(to);
+      if (step == steps.size() || steps[step].first != to) break;  // an open chain (non-manifold): cap what there is
+      while (step < steps.size() && steps[step].first == to && used[step]) ++step;
+      if (step == steps.size() || steps[step].first != to) break;
+      used[step] = 1;
+      to = steps[step].second;
+    }
+    if (loop.size() >= 3) patch.holes.push_back(std::move(loop));
   }
   return patch;
 }

@@ -29,7 +29,7 @@ struct VolumeSurface {
 };
 
 // Welds vertices closer than `weld_tolerance` (scene units, on a grid of that size, as
-// formats/surface_graph.h does); drops triangles that welding makes degenerate.
+// pipeline/surface_graph.h does); drops triangles that welding makes degenerate.
 VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance);
 
 // The given welded triangles (indices into surface.whole.triangles) and their boundary loops: edges

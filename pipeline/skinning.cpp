@@ -62,33 +62,36 @@ void skinLinearBlend(const std::vector<Eigen::Vector3d>& bind_positions, const I
   }
 }
 
+void splitDualQuaternion(const Eigen::Affine3d& matrix, Eigen::Quaterniond* real_out, Eigen::Quaterniond* dual_out,
+                         Eigen::Matrix3d* stretch) {
+  // Polar decomposition M = R S by Newton's iteration R <- (R + R^-T) / 2 (Higham, "Computing the
+  // polar decomposition - with applications", SIAM J. Sci. Stat. Comput. 7(4), 1986), which converges
+  // quadratically; a mirrored joint keeps its mirror in S.
+  const Eigen::Matrix3d linear = matrix.linear();
+  const double sign = linear.determinant() < 0 ? -1.0 : 1.0;
+  Eigen::Matrix3d rotation = sign * linear;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const Eigen::Matrix3d next = 0.5 * (rotation + rotation.inverse().transpose());
+    const double step = (next - rotation).cwiseAbs().maxCoeff();
+    rotation = next;
+    if (step < 1e-15) break;
+  }
+  *stretch = rotation.transpose() * linear;
+  const Eigen::Quaterniond real(rotation);
+  const Eigen::Vector3d t = matrix.translation();
+  const Eigen::Quaterniond translation(0.0, t.x(), t.y(), t.z());
+  Eigen::Quaterniond dual = translation * real;
+  dual.coeffs() *= 0.5;
+  *real_out = real.normalized();
+  *dual_out = dual;
+}
+
 DualQuaternionFrame dualQuaternionFrame(const std::vector<Eigen::Affine3d>& frame) {
   DualQuaternionFrame split;
   split.real.resize(frame.size());
   split.dual.resize(frame.size());
   split.stretch.resize(frame.size());
-  for (size_t j = 0; j < frame.size(); ++j) {
-    // Polar decomposition M = R S by Newton's iteration R <- (R + R^-T) / 2 (Higham, "Computing the
-    // polar decomposition - with applications", SIAM J. Sci. Stat. Comput. 7(4), 1986), which converges
-    // quadratically; a mirrored joint keeps its mirror in S.
-    const Eigen::Matrix3d linear = frame[j].linear();
-    const double sign = linear.determinant() < 0 ? -1.0 : 1.0;
-    Eigen::Matrix3d rotation = sign * linear;
-    for (int iteration = 0; iteration < 30; ++iteration) {
-      const Eigen::Matrix3d next = 0.5 * (rotation + rotation.inverse().transpose());
-      const double step = (next - rotation).cwiseAbs().maxCoeff();
-      rotation = next;
-      if (step < 1e-15) break;
-    }
-    split.stretch[j] = rotation.transpose() * linear;
-    const Eigen::Quaterniond real(rotation);
-    const Eigen::Vector3d t = frame[j].translation();
-    const Eigen::Quaterniond translation(0.0, t.x(), t.y(), t.z());
-    Eigen::Quaterniond dual = translation * real;
-    dual.coeffs() *= 0.5;
-    split.real[j] = real.normalized();
-    split.dual[j] = dual;
-  }
+  for (size_t j = 0; j < frame.size(); ++j) splitDualQuaternion(frame[j], &split.real[j], &split.dual[j], &split.stretch[j]);
   return split;
 }
 

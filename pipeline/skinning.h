@@ -32,6 +32,11 @@ struct DualQuaternionFrame {
 };
 DualQuaternionFrame dualQuaternionFrame(const std::vector<Eigen::Affine3d>& frame);
 
+// One skin matrix split as dualQuaternionFrame() splits each of its joints, to the bit: the unit
+// rotation quaternion, the dual part and the stretch.
+void splitDualQuaternion(const Eigen::Affine3d& matrix, Eigen::Quaterniond* real, Eigen::Quaterniond* dual,
+                         Eigen::Matrix3d* stretch);
+
 // Dual-quaternion linear blending (Kavan, Collins, Zara, O'Sullivan, "Geometric Skinning with
 // Approximate Dual Quaternion Blending", ACM TOG 27(4), 2008): blend the unit dual quaternions with the
 // vertex's weights, flipping each into the hemisphere of the vertex's strongest joint, normalize, and

@@ -1,0 +1,232 @@
+// Batched single-precision skinning (pipeline/skinning_batch.h): the layout of a part's vertices in
+// groups of four that share their joints, and of one frame's skin matrices with every entry in all
+// four lanes. The per-group loop is in the header, so that callers consume each group while it is in
+// registers.
+#include "pipeline/skinning_batch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "anatomy/error.h"
+#include "pipeline/skinning.h"
+
+namespace rigbake {
+
+int DualQuaternionPivots::rowOf(int joint) {
+  if (joint >= static_cast<int>(row_of_joint.size())) row_of_joint.resize(static_cast<size_t>(joint) + 1, -1);
+  if (row_of_joint[joint] < 0) {
+    row_of_joint[joint] = static_cast<int>(joints.size());
+    joints.push_back(joint);
+  }
+  return row_of_joint[joint];
+}
+
+namespace {
+
+// One vertex's merged slots before grouping.
+struct VertexSlots {
+  std::uint32_t first = 0, count = 0;  // into the joint and weight lists
+  std::uint8_t dual_quaternion_slots = 0;
+  int pivot = -1;  // set 0's first joint in its slot order, when dual quaternions are wanted
+  double set0_total = 0.0;
+};
+
+void splat(float value, Float4* out) {
+  for (float& lane : out->v) lane = value;
+}
+
+}  // namespace
+
+SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positions, const std::vector<int>& vertices,
+                                 const Eigen::Vector3d& centre, const std::array<SetWeights, kSkinSets>& sets,
+                                 const std::vector<char>& dual_quaternions, int dual_quaternion_joints,
+                                 DualQuaternionPivots* pivots) {
+  // Each vertex's joints, ascending, and their weight in each set, in double until they are complete.
+  // Ascending joints make each set's sum independent of the other sets: a joint only another set uses
+  // adds an exact zero to it.
+  std::vector<VertexSlots> slots(vertices.size());
+  std::vector<std::uint16_t> joints;
+  std::vector<std::array<double, kSkinSets>> weights;
+  std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>> sorted;
+  for (size_t i = 0; i < vertices.size(); ++i) {
+    const size_t v = static_cast<size_t>(vertices[i]);
+    VertexSlots& vertex = slots[i];
+    sorted.clear();
+    auto slotOf = [&](int joint) {
+      for (size_t k = 0; k < sorted.size(); ++k)
+        if (sorted[k].first == joint) return k;
+      if (joint < 0 || joint > std::numeric_limits<std::uint16_t>::max())
+        fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " out of range");
+      sorted.push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
+      return sorted.size() - 1;
+    };
+    for (int set = 0; set < kSkinSets; ++set) {
+      for (int sign = 0; sign < 2; ++sign) {
+        const InfluenceSet* influences = sign == 0 ? sets[set].plus : sets[set].minus;
+        if (influences == nullptr) continue;
+        const size_t count = static_cast<size_t>(influences->slots_per_vertex);
+        for (size_t k = 0; k < count; ++k) {
+          const double weight = influences->weights[v * count + k];
+          if (weight == 0.0) continue;
+          const int joint = influences->joints[v * count + k];
+          sorted[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
+          if (set == 0 && sign == 0) {
+            vertex.set0_total += weight;
+            if (vertex.pivot < 0) vertex.pivot = joint;
+          }
+        }
+      }
+    }
+    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    vertex.first = static_cast<std::uint32_t>(joints.size());
+    vertex.count = static_cast<std::uint32_t>(sorted.size());
+    for (const auto& [joint, joint_weights] : sorted) {
+      joints.push_back(joint);
+      weights.push_back(joint_weights);
+    }
+    if (dual_quaternions[i] && sets[0].plus != nullptr && vertex.pivot >= 0) {
+      // Set 0's joints are the lowest ones below dual_quaternion_joints (the others' skeleton joints
+      // blend in with weight 0).
+      size_t count = 0;
+      for (const auto& [joint, joint_weights] : sorted) {
+        if (joint_weights[0] != 0.0 && joint >= dual_quaternion_joints)
+          fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " has no dual quaternion");
+        if (joint < dual_quaternion_joints) ++count;
+      }
+      vertex.dual_quaternion_slots = static_cast<std::uint8_t>(std::min<size_t>(count, 255));
+    } else {
+      vertex.pivot = -1;
+    }
+  }
+
+  // Vertices with the same joints (and the same dual-quaternion pivot) form groups; within a group
+  // they keep their order in `vertices`.
+  auto key = [&](const VertexSlots& a) { return std::make_pair(a.dual_quaternion_slots, a.pivot); };
+  auto sameJoints = [&](const VertexSlots& a, const VertexSlots& b) {
+    return a.count == b.count && key(a) == key(b) &&
+           std::equal(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first);
+  };
+  std::vector<size_t> order(vertices.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t ia, size_t ib) {
+    const VertexSlots &a = slots[ia], &b = slots[ib];
+    if (key(a) != key(b)) return key(a) < key(b);
+    return std::lexicographical_compare(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first,
+                                        joints.begin() + b.first + b.count);
+  });
+
+  SkinningBatch batch;
+  batch.centre = centre;
+  batch.first_slot.push_back(0);
+  for (size_t begin = 0; begin < order.size();) {
+    size_t end = begin + 1;
+    while (end < order.size() && end - begin < kSkinLanes && sameJoints(slots[order[begin]], slots[order[end]])) ++end;
+    const VertexSlots& shared = slots[order[begin]];
+    Float4 x, y, z, inverse_total;
+    splat(1.0f, &inverse_total);
+    for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+      const bool used = begin + lane < end;
+      const size_t i = used ? order[begin + lane] : 0;
+      batch.vertex.push_back(used ? vertices[i] : -1);
+      if (!used) continue;
+      const Eigen::Vector3d p = bind_positions[static_cast<size_t>(vertices[i])] - centre;
+      x.v[lane] = static_cast<float>(p.x());
+      y.v[lane] = static_cast<float>(p.y());
+      z.v[lane] = static_cast<float>(p.z());
+      if (slots[i].set0_total != 0.0) inverse_total.v[lane] = static_cast<float>(1.0 / slots[i].set0_total);
+    }
+    batch.positions.push_back(x);
+    batch.positions.push_back(y);
+    batch.positions.push_back(z);
+    batch.inverse_total.push_back(inverse_total);
+    batch.dual_quaternion_slots.push_back(shared.dual_quaternion_slots);
+    batch.pivot_row.push_back(shared.pivot >= 0 ? pivots->rowOf(shared.pivot) : 0);
+    for (std::uint32_t k = 0; k < shared.count; ++k) {
+      batch.joints.push_back(joints[shared.first + k]);
+      for (int set = 0; set < kSkinSets; ++set) {
+        Float4 lanes;
+        for (size_t lane = 0; lane + begin < end; ++lane)
+          lanes.v[lane] = static_cast<float>(weights[slots[order[begin + lane]].first + k][set]);
+        batch.weights.push_back(lanes);
+      }
+    }
+    batch.first_slot.push_back(static_cast<std::uint32_t>(batch.joints.size()));
+    begin = end;
+  }
+  return batch;
+}
+
+void prepareFloatSkinFrame(const std::vector<Eigen::Affine3d>& frame, const Eigen::Vector3d& centre,
+                           int dual_quaternion_joints, const DualQuaternionPivots& pivots, FloatSkinFrame* out) {
+  const size_t joint_count = frame.size();
+  out->centre = centre;
+  for (int r = 0; r < 3; ++r) splat(static_cast<float>(centre[r]), &out->centre_lanes[static_cast<size_t>(r)]);
+  out->linear.resize(12 * joint_count);
+  double reach = 0.0;
+  for (size_t j = 0; j < joint_count; ++j) {
+    // M - I and the centred translation t + (M - I) c, in double, so that a joint that barely moves
+    // gives small offsets with all their digits.
+    const Eigen::Matrix3d linear = frame[j].linear() - Eigen::Matrix3d::Identity();
+    const Eigen::Vector3d translation = frame[j].translation() + linear * centre;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        splat(static_cast<float>(c < 3 ? linear(r, c) : translation[r]), &out->linear[12 * j + static_cast<size_t>(4 * r + c)]);
+    reach = std::max(reach, linear.norm() + translation.norm());
+  }
+  out->reach = reach;
+
+  const int dq = std::min(dual_quaternion_joints, static_cast<int>(joint_count));
+  out->dual_quaternion_joints = dq;
+  out->dual_quaternion.resize(8 * static_cast<size_t>(dq));
+  out->real_double.resize(static_cast<size_t>(dq));
+  out->stretch_double.resize(static_cast<size_t>(dq));
+  out->rigid = true;
+  for (int j = 0; j < dq; ++j) {
+    Eigen::Quaterniond real, dual;
+    splitDualQuaternion(frame[j], &real, &dual, &out->stretch_double[j]);
+    // A rigid joint's stretch is the identity up to the iteration's rounding (1e-16).
+    if ((out->stretch_double[j] - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-12) out->rigid = false;
+    for (int k = 0; k < 4; ++k) {
+      out->real_double[j][k] = real.coeffs()[k];
+      splat(static_cast<float>(real.coeffs()[k]), &out->dual_quaternion[8 * static_cast<size_t>(j) + static_cast<size_t>(k)]);
+      splat(static_cast<float>(dual.coeffs()[k]), &out->dual_quaternion[8 * static_cast<size_t>(j) + 4 + static_cast<size_t>(k)]);
+    }
+  }
+  out->stretch.resize(out->rigid ? 0 : 12 * static_cast<size_t>(dq));
+  for (int j = 0; j < dq; ++j) {
+    if (out->rigid) {
+      // The centred map's dual part, 0.5 t' r with t' = t + (M - I) c, as splitDualQuaternion() forms it
+      // (the rotation does not depend on the translation).
+      const Eigen::Vector3d t = frame[j].translation() + (frame[j].linear() - Eigen::Matrix3d::Identity()) * centre;
+      const std::array<double, 4>& r = out->real_double[j];
+      Eigen::Quaterniond dual = Eigen::Quaterniond(0.0, t.x(), t.y(), t.z()) * Eigen::Quaterniond(r[3], r[0], r[1], r[2]);
+      dual.coeffs() *= 0.5;
+      for (int k = 0; k < 4; ++k)
+        splat(static_cast<float>(dual.coeffs()[k]), &out->dual_quaternion[8 * static_cast<size_t>(j) + 4 + static_cast<size_t>(k)]);
+      continue;
+    }
+    const Eigen::Matrix3d& stretch = out->stretch_double[j];
+    const Eigen::Vector3d stretched_centre = stretch * centre;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c)
+        splat(static_cast<float>(c < 3 ? stretch(r, c) : stretched_centre[r]),
+              &out->stretch[12 * static_cast<size_t>(j) + static_cast<size_t>(4 * r + c)]);
+  }
+  out->signs.assign(pivots.joints.size() * static_cast<size_t>(dq), 0u);
+  for (size_t row = 0; row < pivots.joints.size(); ++row) {
+    const int pivot = pivots.joints[row];
+    if (pivot >= dq) continue;
+    const std::array<double, 4>& q = out->real_double[pivot];
+    for (int j = 0; j < dq; ++j) {
+      // The same sum, in the same order, as Eigen's dot product of the two coefficient vectors.
+      const std::array<double, 4>& r = out->real_double[j];
+      const double dot = Eigen::Vector4d(r[0], r[1], r[2], r[3]).dot(Eigen::Vector4d(q[0], q[1], q[2], q[3]));
+      if (dot < 0.0) out->signs[row * static_cast<size_t>(dq) + static_cast<size_t>(j)] = 0x80000000u;
+    }
+  }
+}
+
+}  // namespace rigbake
