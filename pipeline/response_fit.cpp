@@ -23,6 +23,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
+#include "pipeline/skinning_batch.h"
 #include "pipeline/skin_volume.h"
 
 namespace rigbake {
@@ -199,20 +200,52 @@ void renumberMoving(const std::vector<int>& moving_of_weld, SplitPatch* split) {
   split->touched = std::move(touched);
 }
 
+// The weight sets of the pose-only pass's skinning batch.
+constexpr int kInputSet = 0, kRigSet = 1;
+
 struct FitPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
-  std::vector<int> welded_vertices;  // welded vertex -> its part vertex, for the pose-only pass
-  // The welded vertices whose rig weights are not the input's (a muscle's slot, or a normalization that
-  // moved a bit): only these need skinning again for the rig in the pose-only pass; the others have the
-  // input's positions to the bit (the same nonzero weights on the same joints, summed in the same order).
-  std::vector<int> rig_welded;   // welded index
-  std::vector<int> rig_vertices;  // its part vertex
   std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
   std::vector<SplitPatch> patches;    // the whole surface, then each region
   std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
   std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per moving index
+  // Skinned in single precision (pipeline/skinning_batch.h), as the figures skin them: the pose-only
+  // pass every welded vertex with the input's and the rig's weights, each iteration the moving
+  // vertices with the rig's. A vertex's offset is the same bits in either batch (a set's offset does
+  // not depend on the other sets or the lane), so the fixed and moving pieces agree where they meet.
+  SkinningBatch welded_batch;
+  std::vector<int> welded_of_lane;  // kSkinLanes per group: welded index, -1 for an empty lane
+  SkinningBatch moving_batch;
+  std::vector<int> moving_of_lane;  // kSkinLanes per group: moving index, -1 for an empty lane
 };
+
+// Positions p + offset in double from a batch's single-precision offsets (set `set`), into
+// (*posed)[index_of_lane[lane]]: the bind position keeps its digits and only the move is rounded.
+void storeSkinned(const SkinnedGroup& group, size_t g, int set, const std::vector<int>& index_of_lane,
+                  const std::vector<int>& vertex_of_index, const std::vector<Eigen::Vector3d>& bind_positions,
+                  std::vector<Eigen::Vector3d>* posed) {
+  Float4 offset[3];
+  for (int r = 0; r < 3; ++r) _mm_store_ps(offset[r].v, group.offset[set][r]);
+  for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+    const int index = index_of_lane[kSkinLanes * g + lane];
+    if (index < 0) continue;
+    (*posed)[static_cast<size_t>(index)] =
+        bind_positions[static_cast<size_t>(vertex_of_index[static_cast<size_t>(index)])] +
+        Eigen::Vector3d(offset[0].v[lane], offset[1].v[lane], offset[2].v[lane]);
+  }
+}
+
+// The lane -> index map of a batch built over `vertices` (indices into a part's vertices).
+std::vector<int> indexOfLane(const SkinningBatch& batch, const std::vector<int>& vertices, size_t part_vertex_count) {
+  std::vector<int> index_of_vertex(part_vertex_count, -1);
+  for (size_t i = 0; i < vertices.size(); ++i) index_of_vertex[static_cast<size_t>(vertices[i])] = static_cast<int>(i);
+  std::vector<int> out(batch.vertex.size(), -1);
+  for (size_t lane = 0; lane < batch.vertex.size(); ++lane) {
+    if (batch.vertex[lane] >= 0) out[lane] = index_of_vertex[static_cast<size_t>(batch.vertex[lane])];
+  }
+  return out;
+}
 
 // One muscle's keys at one pose: its posed rest up and side axes and, per key, the coefficients of a
 // vertex's motion along up, side and the scale's direction per unit amplitude (hat weight included).
@@ -241,21 +274,6 @@ std::vector<Eigen::Affine3d> skinningFrame(const Skeleton& skeleton, const Pose&
   for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
   for (size_t m = 0; m < bind_inverse.size(); ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
   return frame;
-}
-
-// Whether vertex v's nonzero weights are the same joints with the same weights, in the same order, in
-// both sets: linear blend skinning then gives the same bits from either.
-bool sameNonzeroWeights(const InfluenceSet& a, const InfluenceSet& b, int v) {
-  int i = 0, j = 0;
-  const int na = a.slots_per_vertex, nb = b.slots_per_vertex;
-  while (true) {
-    while (i < na && a.weights[v * na + i] == 0.0) ++i;
-    while (j < nb && b.weights[v * nb + j] == 0.0) ++j;
-    if (i == na || j == nb) return i == na && j == nb;
-    if (a.joints[v * na + i] != b.joints[v * nb + j] || a.weights[v * na + i] != b.weights[v * nb + j]) return false;
-    ++i;
-    ++j;
-  }
 }
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
@@ -391,6 +409,18 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     if (measured.region_measured[r]) kept.push_back(r);
   }
   const int region_count = static_cast<int>(kept.size());
+  // Single-precision positions are about the middle of every part's bounding box, as the figures take
+  // them (pipeline/deformation_quality.cpp), so that their rounding is relative to the body's size.
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (const MeasuredPart& part : parts) {
+    for (const Eigen::Vector3d& position : character.meshes[part.mesh_part].positions) {
+      low = low.cwiseMin(position);
+      high = high.cwiseMax(position);
+    }
+  }
+  const Eigen::Vector3d skin_centre =
+      low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  DualQuaternionPivots no_pivots;  // the fit skins by linear blending only
   std::vector<FitPart> fit_parts;
   std::vector<Eigen::Affine3d> bind_inverse(muscle_count);
   for (int m = 0; m < muscle_count; ++m) bind_inverse[m] = muscleBindTransform(muscles->parts[m], skeleton).inverse();
@@ -409,13 +439,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
     VolumeSurface& surface = measured.surfaces[p];
-    part.welded_vertices = surface.vertex_of_weld;
-    for (int w = 0; w < surface.weldedCount(); ++w) {
-      const int v = surface.vertex_of_weld[w];
-      if (sameNonzeroWeights(parts[p].input, parts[p].rig, v)) continue;
-      part.rig_welded.push_back(w);
-      part.rig_vertices.push_back(v);
-    }
     for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     const InfluenceSet& rig = parts[p].rig;
     std::vector<std::vector<MuscleVertex>> muscle_of_weld(surface.weldedCount());
@@ -455,6 +478,17 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         if (!part.muscle_vertices[c].empty()) split.fitted.push_back(c);
       }
     }
+    const size_t part_vertex_count = part.mesh->positions.size();
+    std::array<SetWeights, kSkinSets> welded_sets, moving_sets;
+    welded_sets[kInputSet].plus = &parts[p].input;
+    welded_sets[kRigSet].plus = &parts[p].rig;
+    moving_sets[0].plus = &parts[p].rig;
+    part.welded_batch = buildSkinningBatch(part.mesh->positions, surface.vertex_of_weld, skin_centre, welded_sets,
+                                           std::vector<char>(surface.vertex_of_weld.size(), 0), 0, &no_pivots);
+    part.welded_of_lane = indexOfLane(part.welded_batch, surface.vertex_of_weld, part_vertex_count);
+    part.moving_batch = buildSkinningBatch(part.mesh->positions, part.moving_vertices, skin_centre, moving_sets,
+                                           std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
+    part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
     fit_parts.push_back(std::move(part));
   }
   // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
@@ -524,14 +558,21 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     const runtime::MuscleRig<double> start_rig = buildMuscleRig(*muscles, skeleton);
     parallelForEach(threads, poses.size(), [&](size_t i) {
       const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse);
+      FloatSkinFrame float_frame;
+      prepareFloatSkinFrame(frame, skin_centre, 0, no_pivots, &float_frame);
       std::vector<double> volume(region_count, 0.0);
-      std::vector<Eigen::Vector3d> welded, rig_only;
+      std::vector<Eigen::Vector3d> input, welded;
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.welded_vertices, &welded);
-        for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.rig_vertices, &rig_only);
-        for (size_t k = 0; k < part.rig_welded.size(); ++k) welded[part.rig_welded[k]] = rig_only[k];
+        const std::vector<int>& vertex_of_weld = measured.surfaces[p].vertex_of_weld;
+        input.resize(vertex_of_weld.size());
+        welded.resize(vertex_of_weld.size());
+        skinSkinningBatch<(1u << kInputSet) | (1u << kRigSet)>(
+            part.welded_batch, float_frame, 0, part.welded_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
+              storeSkinned(group, g, kInputSet, part.welded_of_lane, vertex_of_weld, part.mesh->positions, &input);
+              storeSkinned(group, g, kRigSet, part.welded_of_lane, vertex_of_weld, part.mesh->positions, &welded);
+            });
+        for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], input);
         for (size_t k = 0; k < patch_count; ++k) {
           const SplitPatch& split = part.patches[k];
           if (split.first_vertex < 0) continue;
@@ -599,11 +640,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
     std::vector<MuscleSums> sums(muscle_count);
     std::vector<Eigen::Matrix4d> apart(muscle_count);  // a muscle's skinning matrix less its carrier's
+    FloatSkinFrame float_frame;
     for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
       const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, pose, evaluation, bind_inverse);
+      prepareFloatSkinFrame(frame, skin_centre, 0, no_pivots, &float_frame);
       // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
       // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), phi_k the key's hat
       // weight, u and s the skinned joint's rest up and side axes as posed: so a row's Jacobian needs,
@@ -671,7 +714,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       std::vector<double> region_volume(region_count, 0.0);
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.moving_vertices, &posed[p]);
+        posed[p].resize(part.moving_vertices.size());
+        skinSkinningBatch<1u>(part.moving_batch, float_frame, 0, part.moving_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
+          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_vertices, part.mesh->positions, &posed[p]);
+        });
         for (size_t k = 0; k < patch_count; ++k) {
           if (part.patches[k].first_vertex < 0) continue;
           const FixedVolume& fixed = fixed_volume[i][p * patch_count + k];
