@@ -365,6 +365,25 @@ double sumTriangles(const std::vector<std::array<int, 3>>& triangles, const std:
   return volume;
 }
 
+// `rows` (those with keep[r] set, or all when keep is null) as the rows of one matrix, in their order:
+// the normal equations' J^T J is then one blocked product instead of a rank-one update per row.
+Eigen::MatrixXd stackRows(const std::vector<Eigen::VectorXd>& rows, const std::vector<char>* keep, int columns) {
+  Eigen::Index count = 0;
+  for (size_t r = 0; r < rows.size(); ++r) count += keep == nullptr || (*keep)[r];
+  Eigen::MatrixXd stacked(count, columns);
+  Eigen::Index next = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (keep == nullptr || (*keep)[r]) stacked.row(next++) = rows[r].transpose();
+  }
+  return stacked;
+}
+
+// Adds rows^T rows to the lower triangle of `normal`. Eigen's blocked product divides by the inner
+// size, so no rows is no update.
+void addGram(const Eigen::MatrixXd& rows, Eigen::MatrixXd* normal) {
+  if (rows.rows() > 0) normal->selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+}
+
 // A fixed piece at one pose: the point its volume is summed about and that sum.
 struct FixedVolume {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
@@ -1027,12 +1046,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     // (options.prior_weight / unit per amplitude), Marquardt's damping (lambda * diag, so it scales
     // with how strongly each amplitude moves the volumes) and the hinges in the active set.
     const LinearModel& at = best_model;
+    const Eigen::MatrixXd rows = stackRows(at.rows, nullptr, unknowns);
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
-    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(unknowns);
-    for (size_t r = 0; r < at.rows.size(); ++r) {
-      normal.selfadjointView<Eigen::Lower>().rankUpdate(at.rows[r]);
-      gradient += at.rows[r] * at.rhs[r];
-    }
+    addGram(rows, &normal);
+    Eigen::VectorXd gradient = rows.transpose() * Eigen::Map<const Eigen::VectorXd>(at.rhs.data(), rows.rows());
     for (int u = 0; u < unknowns; ++u) {
       const double unit = 1.0 / std::max(reach[u], 1e-3);
       const double w = options.prior_weight / unit;
@@ -1042,9 +1059,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<char> active(at.hinges.size(), 0);
     for (size_t h = 0; h < at.hinges.size(); ++h) active[h] = at.slack[h] < 0.0;
     Eigen::MatrixXd start = normal;
-    for (size_t h = 0; h < at.hinges.size(); ++h) {
-      if (active[h]) start.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
-    }
+    addGram(stackRows(at.hinges, &active, unknowns), &start);
     const Eigen::VectorXd damping_diagonal = damping * start.diagonal().cwiseMax(1e-12);
     for (int u = 0; u < unknowns; ++u) normal(u, u) += damping_diagonal[u];
 
@@ -1068,12 +1083,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     // (an active set: a violated amplitude is held at its bound and the rest solved again).
     auto boundedStep = [&]() {
       Eigen::MatrixXd n = normal;
-      Eigen::VectorXd g = gradient;
-      for (size_t h = 0; h < at.hinges.size(); ++h) {
-        if (!active[h]) continue;
-        n.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
-        g -= at.hinges[h] * at.slack[h];
+      const Eigen::MatrixXd kept_hinges = stackRows(at.hinges, &active, unknowns);
+      Eigen::VectorXd kept_slack(kept_hinges.rows());
+      for (size_t h = 0, next = 0; h < at.hinges.size(); ++h) {
+        if (active[h]) kept_slack[static_cast<Eigen::Index>(next++)] = at.slack[h];
       }
+      addGram(kept_hinges, &n);
+      const Eigen::VectorXd g = gradient - kept_hinges.transpose() * kept_slack;
       n.triangularView<Eigen::StrictlyUpper>() = n.transpose();
       std::vector<int> held(unknowns, 0);  // 0 free, -1 at its lower bound, +1 at its upper bound
       auto heldAt = [&](int u) { return held[u] < 0 ? lowerBound(u) : upperBound(u); };
