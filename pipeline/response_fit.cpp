@@ -289,22 +289,32 @@ struct FitPart {
   std::vector<int> welded_of_lane;  // kSkinLanes per group: welded index, -1 for an empty lane
   SkinningBatch moving_batch;
   std::vector<int> moving_of_lane;  // kSkinLanes per group: moving index, -1 for an empty lane
+  // Each lane's bind position in double, in lane order (zero for an empty lane).
+  std::vector<Eigen::Vector3d> welded_bind, moving_bind;
 };
 
 // Positions p + offset in double from a batch's single-precision offsets (set `set`), into
-// (*posed)[index_of_lane[lane]]: the bind position keeps its digits and only the move is rounded.
+// (*posed)[index_of_lane[lane]]: the bind position (bind_of_lane, in lane order) keeps its digits and
+// only the move is rounded.
 void storeSkinned(const SkinnedGroup& group, size_t g, int set, const std::vector<int>& index_of_lane,
-                  const std::vector<int>& vertex_of_index, const std::vector<Eigen::Vector3d>& bind_positions,
-                  std::vector<Eigen::Vector3d>* posed) {
+                  const std::vector<Eigen::Vector3d>& bind_of_lane, std::vector<Eigen::Vector3d>* posed) {
   Float4 offset[3];
   for (int r = 0; r < 3; ++r) _mm_store_ps(offset[r].v, group.offset[set][r]);
   for (size_t lane = 0; lane < kSkinLanes; ++lane) {
     const int index = index_of_lane[kSkinLanes * g + lane];
     if (index < 0) continue;
     (*posed)[static_cast<size_t>(index)] =
-        bind_positions[static_cast<size_t>(vertex_of_index[static_cast<size_t>(index)])] +
-        Eigen::Vector3d(offset[0].v[lane], offset[1].v[lane], offset[2].v[lane]);
+        bind_of_lane[kSkinLanes * g + lane] + Eigen::Vector3d(offset[0].v[lane], offset[1].v[lane], offset[2].v[lane]);
   }
+}
+
+// Each lane's bind position (zero for an empty lane).
+std::vector<Eigen::Vector3d> bindOfLane(const SkinningBatch& batch, const std::vector<Eigen::Vector3d>& bind_positions) {
+  std::vector<Eigen::Vector3d> out(batch.vertex.size(), Eigen::Vector3d::Zero());
+  for (size_t lane = 0; lane < batch.vertex.size(); ++lane) {
+    if (batch.vertex[lane] >= 0) out[lane] = bind_positions[static_cast<size_t>(batch.vertex[lane])];
+  }
+  return out;
 }
 
 // The lane -> index map of a batch built over `vertices` (indices into a part's vertices).
@@ -390,15 +400,24 @@ struct FixedVolume {
   double volume = 0.0;
 };
 
-// The skinning matrices at a pose: the skeleton's joints, then each muscle's skinned joint.
-std::vector<Eigen::Affine3d> skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
-                                           const std::vector<Eigen::Affine3d>& bind_inverse) {
+// The skinning matrices at a pose: the skeleton's joints, then each muscle's skinned joint (into
+// `frame`, reusing its storage from pose to pose).
+void skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
+                   const std::vector<Eigen::Affine3d>& bind_inverse, std::vector<Eigen::Affine3d>* frame) {
   const int joint_count = skeleton.size();
-  std::vector<Eigen::Affine3d> frame(joint_count + bind_inverse.size());
-  for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
-  for (size_t m = 0; m < bind_inverse.size(); ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
-  return frame;
+  frame->resize(joint_count + bind_inverse.size());
+  for (int j = 0; j < joint_count; ++j) (*frame)[j] = skinMatrix(pose, skeleton, j);
+  for (size_t m = 0; m < bind_inverse.size(); ++m)
+    (*frame)[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
 }
+
+// What one worker of the pose-only pass reuses from pose to pose.
+struct PoseOnlyScratch {
+  std::vector<Eigen::Affine3d> frame;
+  FloatSkinFrame float_frame;
+  std::vector<double> volume;
+  std::vector<Eigen::Vector3d> input, welded;
+};
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
 
@@ -636,9 +655,11 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     part.welded_batch = buildSkinningBatch(part.mesh->positions, surface.vertex_of_weld, skin_centre, welded_sets,
                                            std::vector<char>(surface.vertex_of_weld.size(), 0), 0, &no_pivots);
     part.welded_of_lane = indexOfLane(part.welded_batch, surface.vertex_of_weld, part_vertex_count);
+    part.welded_bind = bindOfLane(part.welded_batch, part.mesh->positions);
     part.moving_batch = buildSkinningBatch(part.mesh->positions, part.moving_vertices, skin_centre, moving_sets,
                                            std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
     part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
+    part.moving_bind = bindOfLane(part.moving_batch, part.mesh->positions);
     fit_parts.push_back(std::move(part));
   }
   // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
@@ -706,12 +727,15 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   {
     applyTheta(theta);
     const runtime::MuscleRig<double> start_rig = buildMuscleRig(*muscles, skeleton);
-    parallelForEach(threads, poses.size(), [&](size_t i) {
-      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse);
-      FloatSkinFrame float_frame;
-      prepareFloatSkinFrame(frame, skin_centre, 0, no_pivots, &float_frame);
-      std::vector<double> volume(region_count, 0.0);
-      std::vector<Eigen::Vector3d> input, welded;
+    std::vector<PoseOnlyScratch> scratches(parallelWorkerCount(threads, poses.size(), 1));
+    parallelForWorkers(threads, poses.size(), 1, [&](size_t worker, size_t, size_t i, size_t) {
+      PoseOnlyScratch& scratch = scratches[worker];
+      skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse, &scratch.frame);
+      const FloatSkinFrame& float_frame = scratch.float_frame;
+      prepareFloatSkinFrame(scratch.frame, skin_centre, 0, no_pivots, &scratch.float_frame);
+      std::vector<double>& volume = scratch.volume;
+      volume.assign(region_count, 0.0);
+      std::vector<Eigen::Vector3d>&input = scratch.input, &welded = scratch.welded;
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
         const std::vector<int>& vertex_of_weld = measured.surfaces[p].vertex_of_weld;
@@ -719,8 +743,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         welded.resize(vertex_of_weld.size());
         skinSkinningBatch<(1u << kWeldedInputSet) | (1u << kWeldedRigSet)>(
             part.welded_batch, float_frame, 0, part.welded_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
-              storeSkinned(group, g, kWeldedInputSet, part.welded_of_lane, vertex_of_weld, part.mesh->positions, &input);
-              storeSkinned(group, g, kWeldedRigSet, part.welded_of_lane, vertex_of_weld, part.mesh->positions, &welded);
+              storeSkinned(group, g, kWeldedInputSet, part.welded_of_lane, part.welded_bind, &input);
+              storeSkinned(group, g, kWeldedRigSet, part.welded_of_lane, part.welded_bind, &welded);
             });
         for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], input);
         for (size_t k = 0; k < patch_count; ++k) {
@@ -792,12 +816,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
     std::vector<MuscleSums> sums(muscle_count);
     std::vector<Eigen::Matrix4d> apart(muscle_count);  // a muscle's skinning matrix less its carrier's
+    std::vector<Eigen::Affine3d> frame;
     FloatSkinFrame float_frame;
     for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
-      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, pose, evaluation, bind_inverse);
+      skinningFrame(skeleton, pose, evaluation, bind_inverse, &frame);
       prepareFloatSkinFrame(frame, skin_centre, 0, no_pivots, &float_frame);
       // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
       // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), phi_k the key's hat
@@ -898,7 +923,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const FitPart& part = fit_parts[p];
         posed[p].resize(part.moving_vertices.size());
         skinSkinningBatch<1u>(part.moving_batch, float_frame, 0, part.moving_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
-          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_vertices, part.mesh->positions, &posed[p]);
+          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_bind, &posed[p]);
         });
         // The body's gradient at the moving vertices is kept: the body row's Jacobian, the inner
         // vertices' of every region, then (normalized) the skin rows' normals.
