@@ -23,6 +23,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
+#include "pipeline/skinning_batch.h"
 #include "pipeline/skin_volume.h"
 
 namespace rigbake {
@@ -160,8 +161,20 @@ struct SplitPatch {
   int first_vertex = -1;     // welded; -1: the patch has no triangles (no volume, no gradient)
   ClosedPatch fixed;         // welded indices
   ClosedPatch moving;        // moving-vertex indices (FitPart::moving_vertices)
-  std::vector<int> touched;  // the moving vertices of `moving`, ascending: zeroed after each gradient
+  std::vector<int> touched;  // the moving vertices of `moving`, ascending
   std::vector<int> fitted;   // the fitted vertices among them, ascending
+  ClosedPatch moving_holes;  // moving.holes alone: summed apart from the triangles
+  // A fitted vertex on no hole whose triangles close a fan around it has the volume gradient
+  // (1/6) sum of their area vectors (the origin drops out of a closed fan's sum of b x c): the whole
+  // surface's pass adds those up. For a region it is the whole surface's gradient when the fan is all
+  // in the region: `inner_fitted`. The others' gradient is the rim's: the piece's triangles around
+  // them, then every hole (addVolumeGradientAbout() keeps that order).
+  std::vector<int> inner_fitted;
+  ClosedPatch rim;
+  std::vector<int> rim_fitted, rim_touched;
+  // Regions only: their moving triangles are all in the whole surface's moving piece, whose pass keeps
+  // each triangle's term; these are their indices there.
+  std::vector<int> whole_triangles;
 };
 
 SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted) {
@@ -177,6 +190,63 @@ SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted)
     (moves ? out.moving : out.fixed).holes.push_back(hole);
   }
   return out;
+}
+
+// Splits a piece's fitted vertices into inner ones and the rim (SplitPatch), after renumberMoving():
+// `whole` is the whole surface's split (which may be `region`), `moving_count` the part's moving
+// vertices.
+void findRim(const SplitPatch& whole, size_t moving_count, SplitPatch* region) {
+  // A vertex is inner when it has as many triangles in the region as in the whole surface (the region's
+  // are among them), is on no hole, and its fan's far edges (b -> c for each triangle (v, b, c)) close:
+  // sum (c - b) = 0 whatever the positions.
+  std::vector<int> whole_count(moving_count, 0), region_count(moving_count, 0);
+  std::vector<char> inner(moving_count, 1);
+  for (const auto& t : whole.moving.triangles) {
+    for (int w : t) ++whole_count[static_cast<size_t>(w)];
+  }
+  for (const auto& t : region->moving.triangles) {
+    for (int w : t) ++region_count[static_cast<size_t>(w)];
+  }
+  for (const ClosedPatch* patch : {&whole.moving, static_cast<const ClosedPatch*>(&region->moving)}) {
+    for (const std::vector<int>& hole : patch->holes) {
+      for (int w : hole) inner[static_cast<size_t>(w)] = 0;
+    }
+  }
+  // The fan closes when every far vertex starts as many far edges as it ends: checked per fitted vertex
+  // by sorting its fan's starts and ends.
+  std::vector<std::vector<int>> starts(moving_count), ends(moving_count);
+  for (const auto& t : whole.moving.triangles) {
+    for (int k = 0; k < 3; ++k) {
+      starts[static_cast<size_t>(t[k])].push_back(t[(k + 1) % 3]);
+      ends[static_cast<size_t>(t[k])].push_back(t[(k + 2) % 3]);
+    }
+  }
+  for (int w : region->fitted) {
+    const size_t c = static_cast<size_t>(w);
+    std::sort(starts[c].begin(), starts[c].end());
+    std::sort(ends[c].begin(), ends[c].end());
+    if (whole_count[c] != region_count[c] || starts[c] != ends[c]) inner[c] = 0;
+  }
+  std::vector<char> on_rim(moving_count, 0);
+  for (int w : region->fitted) {
+    if (inner[static_cast<size_t>(w)]) {
+      region->inner_fitted.push_back(w);
+    } else {
+      region->rim_fitted.push_back(w);
+      on_rim[static_cast<size_t>(w)] = 1;
+    }
+  }
+  for (const auto& t : region->moving.triangles) {
+    if (on_rim[static_cast<size_t>(t[0])] || on_rim[static_cast<size_t>(t[1])] || on_rim[static_cast<size_t>(t[2])])
+      region->rim.triangles.push_back(t);
+  }
+  region->rim.holes = region->moving.holes;
+  std::vector<int> touched;
+  for (const auto& t : region->rim.triangles) touched.insert(touched.end(), t.begin(), t.end());
+  for (const std::vector<int>& hole : region->rim.holes) touched.insert(touched.end(), hole.begin(), hole.end());
+  std::sort(touched.begin(), touched.end());
+  touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+  region->rim_touched = std::move(touched);
 }
 
 // Renumbers a moving piece's welded indices to moving-vertex indices and lists the ones it touches.
@@ -197,22 +267,66 @@ void renumberMoving(const std::vector<int>& moving_of_weld, SplitPatch* split) {
   std::sort(touched.begin(), touched.end());
   touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
   split->touched = std::move(touched);
+  split->moving_holes.holes = split->moving.holes;
 }
+
+// The weight sets of the pose-only pass's skinning batch.
+constexpr int kWeldedInputSet = 0, kWeldedRigSet = 1;
 
 struct FitPart {
   const MeshPart* mesh = nullptr;
   const MeasuredPart* weights = nullptr;
-  std::vector<int> welded_vertices;  // welded vertex -> its part vertex, for the pose-only pass
-  // The welded vertices whose rig weights are not the input's (a muscle's slot, or a normalization that
-  // moved a bit): only these need skinning again for the rig in the pose-only pass; the others have the
-  // input's positions to the bit (the same nonzero weights on the same joints, summed in the same order).
-  std::vector<int> rig_welded;   // welded index
-  std::vector<int> rig_vertices;  // its part vertex
   std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
   std::vector<SplitPatch> patches;    // the whole surface, then each region
   std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
   std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per moving index
+  std::vector<int> first_share;  // moving index -> its first muscle slot in a flat list of all of them
+  // Skinned in single precision (pipeline/skinning_batch.h), as the figures skin them: the pose-only
+  // pass every welded vertex with the input's and the rig's weights, each iteration the moving
+  // vertices with the rig's. A vertex's offset is the same bits in either batch (a set's offset does
+  // not depend on the other sets or the lane), so the fixed and moving pieces agree where they meet.
+  SkinningBatch welded_batch;
+  std::vector<int> welded_of_lane;  // kSkinLanes per group: welded index, -1 for an empty lane
+  SkinningBatch moving_batch;
+  std::vector<int> moving_of_lane;  // kSkinLanes per group: moving index, -1 for an empty lane
+  // Each lane's bind position in double, in lane order (zero for an empty lane).
+  std::vector<Eigen::Vector3d> welded_bind, moving_bind;
 };
+
+// Positions p + offset in double from a batch's single-precision offsets (set `set`), into
+// (*posed)[index_of_lane[lane]]: the bind position (bind_of_lane, in lane order) keeps its digits and
+// only the move is rounded.
+void storeSkinned(const SkinnedGroup& group, size_t g, int set, const std::vector<int>& index_of_lane,
+                  const std::vector<Eigen::Vector3d>& bind_of_lane, std::vector<Eigen::Vector3d>* posed) {
+  Float4 offset[3];
+  for (int r = 0; r < 3; ++r) _mm_store_ps(offset[r].v, group.offset[set][r]);
+  for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+    const int index = index_of_lane[kSkinLanes * g + lane];
+    if (index < 0) continue;
+    (*posed)[static_cast<size_t>(index)] =
+        bind_of_lane[kSkinLanes * g + lane] + Eigen::Vector3d(offset[0].v[lane], offset[1].v[lane], offset[2].v[lane]);
+  }
+}
+
+// Each lane's bind position (zero for an empty lane).
+std::vector<Eigen::Vector3d> bindOfLane(const SkinningBatch& batch, const std::vector<Eigen::Vector3d>& bind_positions) {
+  std::vector<Eigen::Vector3d> out(batch.vertex.size(), Eigen::Vector3d::Zero());
+  for (size_t lane = 0; lane < batch.vertex.size(); ++lane) {
+    if (batch.vertex[lane] >= 0) out[lane] = bind_positions[static_cast<size_t>(batch.vertex[lane])];
+  }
+  return out;
+}
+
+// The lane -> index map of a batch built over `vertices` (indices into a part's vertices).
+std::vector<int> indexOfLane(const SkinningBatch& batch, const std::vector<int>& vertices, size_t part_vertex_count) {
+  std::vector<int> index_of_vertex(part_vertex_count, -1);
+  for (size_t i = 0; i < vertices.size(); ++i) index_of_vertex[static_cast<size_t>(vertices[i])] = static_cast<int>(i);
+  std::vector<int> out(batch.vertex.size(), -1);
+  for (size_t lane = 0; lane < batch.vertex.size(); ++lane) {
+    if (batch.vertex[lane] >= 0) out[lane] = index_of_vertex[static_cast<size_t>(batch.vertex[lane])];
+  }
+  return out;
+}
 
 // One muscle's keys at one pose: its posed rest up and side axes and, per key, the coefficients of a
 // vertex's motion along up, side and the scale's direction per unit amplitude (hat weight included).
@@ -227,36 +341,83 @@ struct MuscleSums {
   double up = 0.0, side = 0.0, scale = 0.0;
 };
 
+// One triangle (a, b, c) of a piece summed about a point o: six times the volume of the tetrahedron
+// (o, a, b, c), (a - o) . n, and its area vector n = (b - a) x (c - a), from which its term about
+// another point o + d follows, minus d . n. The whole surface's pass keeps these, and each region's
+// moving triangles, all among the whole surface's, are summed from them about the region's own point.
+struct TriangleTerm {
+  double volume = 0.0;
+  Eigen::Vector3d area = Eigen::Vector3d::Zero();
+};
+
+// Six times the volume of `triangles` about `origin` (enclosedVolumeAbout()'s sum over triangles, as
+// the figures form each term: pipeline/deformation_quality.cpp), each triangle's TriangleTerm, and a
+// sixth of its area vector added to the gradient at its corners: the volume gradient at a vertex whose
+// fan is closed (SplitPatch), in one pass with one cross product per triangle.
+double sumTriangles(const std::vector<std::array<int, 3>>& triangles, const std::vector<Eigen::Vector3d>& posed,
+                    const Eigen::Vector3d& origin, std::vector<Eigen::Vector3d>* gradient, std::vector<TriangleTerm>* terms) {
+  std::vector<Eigen::Vector3d>& g = *gradient;
+  terms->resize(triangles.size());
+  constexpr double kSixth = 1.0 / 6.0;
+  double volume = 0.0;
+  for (size_t i = 0; i < triangles.size(); ++i) {
+    const std::array<int, 3>& t = triangles[i];
+    const Eigen::Vector3d& a = posed[t[0]];
+    const Eigen::Vector3d area = (posed[t[1]] - a).cross(posed[t[2]] - a);
+    const double term = (a - origin).dot(area);
+    volume += term;
+    const Eigen::Vector3d share = kSixth * area;
+    g[t[0]] += share;
+    g[t[1]] += share;
+    g[t[2]] += share;
+    (*terms)[i] = {term, area};
+  }
+  return volume;
+}
+
+// `rows` (those with keep[r] set, or all when keep is null) as the rows of one matrix, in their order:
+// the normal equations' J^T J is then one blocked product instead of a rank-one update per row.
+Eigen::MatrixXd stackRows(const std::vector<Eigen::VectorXd>& rows, const std::vector<char>* keep, int columns) {
+  Eigen::Index count = 0;
+  for (size_t r = 0; r < rows.size(); ++r) count += keep == nullptr || (*keep)[r];
+  Eigen::MatrixXd stacked(count, columns);
+  Eigen::Index next = 0;
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (keep == nullptr || (*keep)[r]) stacked.row(next++) = rows[r].transpose();
+  }
+  return stacked;
+}
+
+// Adds rows^T rows to the lower triangle of `normal`. Eigen's blocked product divides by the inner
+// size, so no rows is no update.
+void addGram(const Eigen::MatrixXd& rows, Eigen::MatrixXd* normal) {
+  if (rows.rows() > 0) normal->selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
+}
+
 // A fixed piece at one pose: the point its volume is summed about and that sum.
 struct FixedVolume {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   double volume = 0.0;
 };
 
-// The skinning matrices at a pose: the skeleton's joints, then each muscle's skinned joint.
-std::vector<Eigen::Affine3d> skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
-                                           const std::vector<Eigen::Affine3d>& bind_inverse) {
+// The skinning matrices at a pose: the skeleton's joints, then each muscle's skinned joint (into
+// `frame`, reusing its storage from pose to pose).
+void skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
+                   const std::vector<Eigen::Affine3d>& bind_inverse, std::vector<Eigen::Affine3d>* frame) {
   const int joint_count = skeleton.size();
-  std::vector<Eigen::Affine3d> frame(joint_count + bind_inverse.size());
-  for (int j = 0; j < joint_count; ++j) frame[j] = skinMatrix(pose, skeleton, j);
-  for (size_t m = 0; m < bind_inverse.size(); ++m) frame[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
-  return frame;
+  frame->resize(joint_count + bind_inverse.size());
+  for (int j = 0; j < joint_count; ++j) (*frame)[j] = skinMatrix(pose, skeleton, j);
+  for (size_t m = 0; m < bind_inverse.size(); ++m)
+    (*frame)[joint_count + m] = matrixAt(evaluation.skinned, static_cast<int>(m)) * bind_inverse[m];
 }
 
-// Whether vertex v's nonzero weights are the same joints with the same weights, in the same order, in
-// both sets: linear blend skinning then gives the same bits from either.
-bool sameNonzeroWeights(const InfluenceSet& a, const InfluenceSet& b, int v) {
-  int i = 0, j = 0;
-  const int na = a.slots_per_vertex, nb = b.slots_per_vertex;
-  while (true) {
-    while (i < na && a.weights[v * na + i] == 0.0) ++i;
-    while (j < nb && b.weights[v * nb + j] == 0.0) ++j;
-    if (i == na || j == nb) return i == na && j == nb;
-    if (a.joints[v * na + i] != b.joints[v * nb + j] || a.weights[v * na + i] != b.weights[v * nb + j]) return false;
-    ++i;
-    ++j;
-  }
-}
+// What one worker of the pose-only pass reuses from pose to pose.
+struct PoseOnlyScratch {
+  std::vector<Eigen::Affine3d> frame;
+  FloatSkinFrame float_frame;
+  std::vector<double> volume;
+  std::vector<Eigen::Vector3d> input, welded;
+};
 
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
 
@@ -391,6 +552,18 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     if (measured.region_measured[r]) kept.push_back(r);
   }
   const int region_count = static_cast<int>(kept.size());
+  // Single-precision positions are about the middle of every part's bounding box, as the figures take
+  // them (pipeline/deformation_quality.cpp), so that their rounding is relative to the body's size.
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (const MeasuredPart& part : parts) {
+    for (const Eigen::Vector3d& position : character.meshes[part.mesh_part].positions) {
+      low = low.cwiseMin(position);
+      high = high.cwiseMax(position);
+    }
+  }
+  const Eigen::Vector3d skin_centre =
+      low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  DualQuaternionPivots no_pivots;  // the fit skins by linear blending only
   std::vector<FitPart> fit_parts;
   std::vector<Eigen::Affine3d> bind_inverse(muscle_count);
   for (int m = 0; m < muscle_count; ++m) bind_inverse[m] = muscleBindTransform(muscles->parts[m], skeleton).inverse();
@@ -409,13 +582,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
     VolumeSurface& surface = measured.surfaces[p];
-    part.welded_vertices = surface.vertex_of_weld;
-    for (int w = 0; w < surface.weldedCount(); ++w) {
-      const int v = surface.vertex_of_weld[w];
-      if (sameNonzeroWeights(parts[p].input, parts[p].rig, v)) continue;
-      part.rig_welded.push_back(w);
-      part.rig_vertices.push_back(v);
-    }
     for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     const InfluenceSet& rig = parts[p].rig;
     std::vector<std::vector<MuscleVertex>> muscle_of_weld(surface.weldedCount());
@@ -455,6 +621,45 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         if (!part.muscle_vertices[c].empty()) split.fitted.push_back(c);
       }
     }
+    findRim(part.patches[0], part.moving_vertices.size(), &part.patches[0]);
+    part.first_share.push_back(0);
+    for (const std::vector<MuscleVertex>& slots : part.muscle_vertices)
+      part.first_share.push_back(part.first_share.back() + static_cast<int>(slots.size()));
+    // Each region's moving triangles as indices into the whole surface's moving piece: the region's
+    // patch holds the surface triangles of its part triangles, in order (measuredSurfaces()).
+    {
+      std::vector<int> whole_of_part(part.mesh->triangles.size(), -1);
+      for (size_t t = 0; t < surface.part_triangle.size(); ++t) whole_of_part[surface.part_triangle[t]] = static_cast<int>(t);
+      std::vector<int> moving_index(surface.whole.triangles.size(), -1);
+      int next = 0;
+      for (size_t t = 0; t < surface.whole.triangles.size(); ++t) {
+        const auto& w = surface.whole.triangles[t];
+        if (fitted[w[0]] || fitted[w[1]] || fitted[w[2]]) moving_index[t] = next++;
+      }
+      for (size_t k = 0; k < kept.size(); ++k) {
+        SplitPatch& split = part.patches[k + 1];
+        if (p < regions[kept[k]].triangles.size()) {
+          for (int t : regions[kept[k]].triangles[p]) {
+            if (whole_of_part[t] >= 0 && moving_index[whole_of_part[t]] >= 0) split.whole_triangles.push_back(moving_index[whole_of_part[t]]);
+          }
+        }
+        assert(split.whole_triangles.size() == split.moving.triangles.size());
+        findRim(part.patches[0], part.moving_vertices.size(), &split);
+      }
+    }
+    const size_t part_vertex_count = part.mesh->positions.size();
+    std::array<SetWeights, kSkinSets> welded_sets, moving_sets;
+    welded_sets[kWeldedInputSet].plus = &parts[p].input;
+    welded_sets[kWeldedRigSet].plus = &parts[p].rig;
+    moving_sets[0].plus = &parts[p].rig;
+    part.welded_batch = buildSkinningBatch(part.mesh->positions, surface.vertex_of_weld, skin_centre, welded_sets,
+                                           std::vector<char>(surface.vertex_of_weld.size(), 0), 0, &no_pivots);
+    part.welded_of_lane = indexOfLane(part.welded_batch, surface.vertex_of_weld, part_vertex_count);
+    part.welded_bind = bindOfLane(part.welded_batch, part.mesh->positions);
+    part.moving_batch = buildSkinningBatch(part.mesh->positions, part.moving_vertices, skin_centre, moving_sets,
+                                           std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
+    part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
+    part.moving_bind = bindOfLane(part.moving_batch, part.mesh->positions);
     fit_parts.push_back(std::move(part));
   }
   // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
@@ -522,16 +727,26 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   {
     applyTheta(theta);
     const runtime::MuscleRig<double> start_rig = buildMuscleRig(*muscles, skeleton);
-    parallelForEach(threads, poses.size(), [&](size_t i) {
-      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse);
-      std::vector<double> volume(region_count, 0.0);
-      std::vector<Eigen::Vector3d> welded, rig_only;
+    std::vector<PoseOnlyScratch> scratches(parallelWorkerCount(threads, poses.size(), 1));
+    parallelForWorkers(threads, poses.size(), 1, [&](size_t worker, size_t, size_t i, size_t) {
+      PoseOnlyScratch& scratch = scratches[worker];
+      skinningFrame(skeleton, poses[i], evaluateRig(start_rig, poses[i], false), bind_inverse, &scratch.frame);
+      const FloatSkinFrame& float_frame = scratch.float_frame;
+      prepareFloatSkinFrame(scratch.frame, skin_centre, 0, no_pivots, &scratch.float_frame);
+      std::vector<double>& volume = scratch.volume;
+      volume.assign(region_count, 0.0);
+      std::vector<Eigen::Vector3d>&input = scratch.input, &welded = scratch.welded;
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        skinLinearBlend(part.mesh->positions, part.weights->input, frame, part.welded_vertices, &welded);
-        for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], welded);
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.rig_vertices, &rig_only);
-        for (size_t k = 0; k < part.rig_welded.size(); ++k) welded[part.rig_welded[k]] = rig_only[k];
+        const std::vector<int>& vertex_of_weld = measured.surfaces[p].vertex_of_weld;
+        input.resize(vertex_of_weld.size());
+        welded.resize(vertex_of_weld.size());
+        skinSkinningBatch<(1u << kWeldedInputSet) | (1u << kWeldedRigSet)>(
+            part.welded_batch, float_frame, 0, part.welded_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
+              storeSkinned(group, g, kWeldedInputSet, part.welded_of_lane, part.welded_bind, &input);
+              storeSkinned(group, g, kWeldedRigSet, part.welded_of_lane, part.welded_bind, &welded);
+            });
+        for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], input);
         for (size_t k = 0; k < patch_count; ++k) {
           const SplitPatch& split = part.patches[k];
           if (split.first_vertex < 0) continue;
@@ -596,14 +811,19 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
     std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size()), moved(fit_parts.size());
     std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size()), normals(fit_parts.size());
+    std::vector<std::vector<TriangleTerm>> terms(fit_parts.size());
+    std::vector<std::vector<MuscleSums>> body_shares(fit_parts.size());  // per part, per muscle slot
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
     std::vector<MuscleSums> sums(muscle_count);
     std::vector<Eigen::Matrix4d> apart(muscle_count);  // a muscle's skinning matrix less its carrier's
+    std::vector<Eigen::Affine3d> frame;
+    FloatSkinFrame float_frame;
     for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
-      const std::vector<Eigen::Affine3d> frame = skinningFrame(skeleton, pose, evaluation, bind_inverse);
+      skinningFrame(skeleton, pose, evaluation, bind_inverse, &frame);
+      prepareFloatSkinFrame(frame, skin_centre, 0, no_pivots, &float_frame);
       // Per muscle at this pose, a vertex's motion per unit of each key's amplitude is
       // weight * phi_k * (up_k * u + side_k * s + scale_k * (q_y u + q_z s)), phi_k the key's hat
       // weight, u and s the skinned joint's rest up and side axes as posed: so a row's Jacobian needs,
@@ -638,6 +858,35 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           sum.scale += mv.q.y() * along_up + mv.q.z() * along_side;
         }
       };
+      // The body row's shares are kept per muscle slot: a region's inner vertices have the same
+      // gradient, so their shares are only added up again.
+      auto addBodyVertex = [&](size_t p, int w) {
+        const FitPart& part = fit_parts[p];
+        const Eigen::Vector3d& g = normals[p][w];
+        MuscleSums* share = body_shares[p].data() + part.first_share[w];
+        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
+          const MuscleKeyMotion& motion = key_motion[mv.muscle];
+          const double along_up = mv.weight * g.dot(motion.up_axis);
+          const double along_side = mv.weight * g.dot(motion.side_axis);
+          *share = {along_up, along_side, mv.q.y() * along_up + mv.q.z() * along_side};
+          MuscleSums& sum = sums[mv.muscle];
+          sum.up += share->up;
+          sum.side += share->side;
+          sum.scale += share->scale;
+          ++share;
+        }
+      };
+      auto addInnerVertex = [&](size_t p, int w) {
+        const FitPart& part = fit_parts[p];
+        const MuscleSums* share = body_shares[p].data() + part.first_share[w];
+        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
+          MuscleSums& sum = sums[mv.muscle];
+          sum.up += share->up;
+          sum.side += share->side;
+          sum.scale += share->scale;
+          ++share;
+        }
+      };
       auto takeRow = [&](double weight) {
         Eigen::VectorXd jacobian = Eigen::VectorXd::Zero(unknowns);
         for (int m = 0; m < muscle_count; ++m) {
@@ -657,12 +906,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           const FitPart& part = fit_parts[p];
           const SplitPatch& split = part.patches[k];
           if (split.first_vertex < 0) continue;
-          // The gradient at the fitted muscles' vertices, from the triangles around them only; the
-          // entries it touches are zeroed again for the next patch.
+          // Inner vertices have the body's gradient; the rim's is summed from the triangles around it
+          // and the holes, and the entries it touches are zeroed again for the next patch.
+          for (int w : split.inner_fitted) addInnerVertex(p, w);
           std::vector<Eigen::Vector3d>& gradient = gradients[p];
-          addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
-          for (int w : split.fitted) addVertex(part, w, gradient[w], 1.0);
-          for (int w : split.touched) gradient[w].setZero();
+          addVolumeGradientAbout(split.rim, posed[p], fixed_volume[i][p * patch_count + k].origin, 1.0, &gradient);
+          for (int w : split.rim_fitted) addVertex(part, w, gradient[w], 1.0);
+          for (int w : split.rim_touched) gradient[w].setZero();
         }
         return takeRow(weight);
       };
@@ -671,12 +921,36 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       std::vector<double> region_volume(region_count, 0.0);
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
-        skinLinearBlend(part.mesh->positions, part.weights->rig, frame, part.moving_vertices, &posed[p]);
-        for (size_t k = 0; k < patch_count; ++k) {
-          if (part.patches[k].first_vertex < 0) continue;
+        posed[p].resize(part.moving_vertices.size());
+        skinSkinningBatch<1u>(part.moving_batch, float_frame, 0, part.moving_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
+          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_bind, &posed[p]);
+        });
+        // The body's gradient at the moving vertices is kept: the body row's Jacobian, the inner
+        // vertices' of every region, then (normalized) the skin rows' normals.
+        normals[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+        const SplitPatch& whole = part.patches[0];
+        if (whole.first_vertex < 0) continue;  // no triangles: nor has any region
+        const FixedVolume& whole_fixed = fixed_volume[i][p * patch_count];
+        const double whole_sum = sumTriangles(whole.moving.triangles, posed[p], whole_fixed.origin, &normals[p], &terms[p]);
+        body += whole_fixed.volume + whole_sum / 6.0 + enclosedVolumeAbout(whole.moving_holes, posed[p], whole_fixed.origin);
+        if (!whole.rim_fitted.empty()) {
+          std::vector<Eigen::Vector3d>& gradient = gradients[p];
+          addVolumeGradientAbout(whole.rim, posed[p], whole_fixed.origin, 1.0, &gradient);
+          for (int w : whole.rim_fitted) normals[p][w] = gradient[w];
+          for (int w : whole.rim_touched) gradient[w].setZero();
+        }
+        for (size_t k = 1; k < patch_count; ++k) {
+          const SplitPatch& split = part.patches[k];
+          if (split.first_vertex < 0) continue;
           const FixedVolume& fixed = fixed_volume[i][p * patch_count + k];
-          const double volume = fixed.volume + enclosedVolumeAbout(part.patches[k].moving, posed[p], fixed.origin);
-          (k == 0 ? body : region_volume[k - 1]) += volume;
+          const Eigen::Vector3d shift = fixed.origin - whole_fixed.origin;
+          double sum = 0.0;
+          Eigen::Vector3d area = Eigen::Vector3d::Zero();
+          for (int t : split.whole_triangles) {
+            sum += terms[p][static_cast<size_t>(t)].volume;
+            area += terms[p][static_cast<size_t>(t)].area;
+          }
+          region_volume[k - 1] += fixed.volume + (sum - shift.dot(area)) / 6.0 + enclosedVolumeAbout(split.moving_holes, posed[p], fixed.origin);
         }
       }
       const double body_change = signedChange(body, bind_body);
@@ -686,16 +960,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       // The body, always (weights make volumes fractions of their bind volume).
       const double body_weight = options.body_weight / std::max(std::abs(bind_body), 1e-30);
       model.rhs.push_back(-body_weight * std::abs(bind_body) * body_change);
-      // The body's gradient at the moving vertices, kept: the body row's Jacobian, then (normalized) the
-      // skin rows' normals.
-      for (size_t p = 0; p < fit_parts.size(); ++p) {
-        const FitPart& part = fit_parts[p];
-        const SplitPatch& split = part.patches[0];
-        normals[p].assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
-        if (split.first_vertex < 0) continue;
-        addVolumeGradientAbout(split.moving, posed[p], fixed_volume[i][p * patch_count].origin, 1.0, &normals[p]);
-        if (!measure_only) {
-          for (int w : split.fitted) addVertex(part, w, normals[p][w], 1.0);
+      if (!measure_only) {
+        for (size_t p = 0; p < fit_parts.size(); ++p) {
+          body_shares[p].resize(static_cast<size_t>(fit_parts[p].first_share.back()));
+          for (int w : fit_parts[p].patches[0].fitted) addBodyVertex(p, w);
         }
       }
       if (!measure_only) model.rows.push_back(takeRow(body_weight));
@@ -803,12 +1071,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     // (options.prior_weight / unit per amplitude), Marquardt's damping (lambda * diag, so it scales
     // with how strongly each amplitude moves the volumes) and the hinges in the active set.
     const LinearModel& at = best_model;
+    const Eigen::MatrixXd rows = stackRows(at.rows, nullptr, unknowns);
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
-    Eigen::VectorXd gradient = Eigen::VectorXd::Zero(unknowns);
-    for (size_t r = 0; r < at.rows.size(); ++r) {
-      normal.selfadjointView<Eigen::Lower>().rankUpdate(at.rows[r]);
-      gradient += at.rows[r] * at.rhs[r];
-    }
+    addGram(rows, &normal);
+    Eigen::VectorXd gradient = rows.transpose() * Eigen::Map<const Eigen::VectorXd>(at.rhs.data(), rows.rows());
     for (int u = 0; u < unknowns; ++u) {
       const double unit = 1.0 / std::max(reach[u], 1e-3);
       const double w = options.prior_weight / unit;
@@ -818,9 +1084,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<char> active(at.hinges.size(), 0);
     for (size_t h = 0; h < at.hinges.size(); ++h) active[h] = at.slack[h] < 0.0;
     Eigen::MatrixXd start = normal;
-    for (size_t h = 0; h < at.hinges.size(); ++h) {
-      if (active[h]) start.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
-    }
+    addGram(stackRows(at.hinges, &active, unknowns), &start);
     const Eigen::VectorXd damping_diagonal = damping * start.diagonal().cwiseMax(1e-12);
     for (int u = 0; u < unknowns; ++u) normal(u, u) += damping_diagonal[u];
 
@@ -844,12 +1108,13 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     // (an active set: a violated amplitude is held at its bound and the rest solved again).
     auto boundedStep = [&]() {
       Eigen::MatrixXd n = normal;
-      Eigen::VectorXd g = gradient;
-      for (size_t h = 0; h < at.hinges.size(); ++h) {
-        if (!active[h]) continue;
-        n.selfadjointView<Eigen::Lower>().rankUpdate(at.hinges[h]);
-        g -= at.hinges[h] * at.slack[h];
+      const Eigen::MatrixXd kept_hinges = stackRows(at.hinges, &active, unknowns);
+      Eigen::VectorXd kept_slack(kept_hinges.rows());
+      for (size_t h = 0, next = 0; h < at.hinges.size(); ++h) {
+        if (active[h]) kept_slack[static_cast<Eigen::Index>(next++)] = at.slack[h];
       }
+      addGram(kept_hinges, &n);
+      const Eigen::VectorXd g = gradient - kept_hinges.transpose() * kept_slack;
       n.triangularView<Eigen::StrictlyUpper>() = n.transpose();
       std::vector<int> held(unknowns, 0);  // 0 free, -1 at its lower bound, +1 at its upper bound
       auto heldAt = [&](int u) { return held[u] < 0 ? lowerBound(u) : upperBound(u); };
