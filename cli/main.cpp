@@ -4,8 +4,10 @@
 
 #include "anatomy/error.h"
 #include "cli/commands.h"
+#include "cli/huge_pages.h"
 
 int main(int argc, char** argv) {
+  rigbake::cli::restartWithHugePages(argv);
   CLI::App app{
       "rigbake builds joint-based muscle rigs for skinned humanoid glTF/GLB/VRM characters and bakes them.\n"
       "Positions are in the scene's units (glTF: metres).\n\n"

@@ -42,11 +42,13 @@ struct TempDir {
   std::string operator/(const std::string& name) const { return (path / name).string(); }
 };
 
-// `args` is a shell-quoted argument string.
-inline CliResult runCli(const std::string& args) {
+// `args` is a shell-quoted argument string; `environment`, when given, is "NAME=value ..." set for
+// this run alone.
+inline CliResult runCli(const std::string& args, const std::string& environment = "") {
   TempDir capture;
   std::string out = capture / "out", err = capture / "err";
-  std::string command = std::string(RIGBAKE_CLI) + " " + args + " >" + out + " 2>" + err + " </dev/null";
+  std::string command = (environment.empty() ? "" : "env " + environment + " ") + std::string(RIGBAKE_CLI) + " " + args + " >" +
+                        out + " 2>" + err + " </dev/null";
   int status = std::system(command.c_str());
   CliResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
