@@ -189,7 +189,7 @@ int run(const BakeCommandOptions& options) {
               << "' at " << peak.time << " s\n";
   }
   if (bake.fit.parameters > 0) {
-    std::cerr << std::setprecision(3) << "response fitted: " << bake.fit.fitted_parts << " muscles, " << bake.fit.parameters
+    std::cerr << std::setprecision(3) << "response fitted: " << bake.fit.fitted_parts << " parts, " << bake.fit.parameters
               << " keys over " << bake.fit.poses << " poses; whole-body volume change (RMS) " << 100.0 * bake.fit.body_rms_before
               << " % -> " << 100.0 * bake.fit.body_rms_after << " %\n";
   }
