@@ -359,7 +359,7 @@ BakedFile writeBakedFile(const GltfDocument& document, const Character& characte
   }
   file.vrm_constrained_muscles = addHelperAimConstraints(&model, character, bake, node_of_joint);
   file.animation_bytes = animationBytes(model);
-  file.bytes = serializeGltf(model, binary);
+  file.bytes = serializeGltf(std::move(model), binary);
   return file;
 }
 

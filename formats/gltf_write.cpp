@@ -23,7 +23,10 @@
 
 #include <algorithm>
 #include <cctype>
-#include <sstream>
+#include <cstdint>
+#include <cstring>
+#include <streambuf>
+#include <ostream>
 
 #include "anatomy/error.h"
 #include "formats/atomic_file.h"
@@ -60,29 +63,47 @@ std::string imageMimeType(const tinygltf::Image& image, const std::vector<unsign
   return "application/octet-stream";
 }
 
-// Appends `size` bytes so that the new offset has the same remainder modulo 4 as `old_offset`: an
-// accessor is valid when (bufferView.byteOffset + accessor.byteOffset) is a multiple of its component
-// size (at most 4), and keeping the remainder keeps exactly the validity the source had.
-size_t appendAligned(std::vector<unsigned char>* out, const unsigned char* data, size_t size, size_t old_offset) {
-  while (out->size() % 4 != old_offset % 4) out->push_back(0);
-  size_t offset = out->size();
-  out->insert(out->end(), data, data + size);
-  return offset;
-}
+// The offset at or after `end` with the same remainder modulo 4 as `old_offset`: an accessor is valid
+// when (bufferView.byteOffset + accessor.byteOffset) is a multiple of its component size (at most 4),
+// and keeping the remainder keeps exactly the validity the source had.
+size_t alignedLike(size_t end, size_t old_offset) { return end + (old_offset % 4 + 4 - end % 4) % 4; }
 
-// One buffer holding every buffer view, every image in a buffer view.
-tinygltf::Model standAloneCopy(const tinygltf::Model& source) {
-  tinygltf::Model model = source;
-  std::vector<unsigned char> bytes;
+// One byte range of the merged buffer: where it comes from and where it goes.
+struct BinPiece {
+  const unsigned char* data = nullptr;
+  size_t size = 0;
+  size_t offset = 0;
+};
+
+// A model whose buffer views all lie in one buffer (its data left empty), every image in a buffer
+// view, and the pieces of that buffer, which point into `sources` (the model's old buffers) and into
+// the model's images. The bytes are copied once, by the caller, into the file itself: a merged
+// buffer, tinygltf's copy of it and a stream's copy of the file cost three times the output.
+struct StandAlone {
+  tinygltf::Model model;
+  std::vector<tinygltf::Buffer> sources;
+  std::vector<BinPiece> pieces;
+  size_t bin_size = 0;
+};
+
+StandAlone standAloneLayout(tinygltf::Model model) {
+  StandAlone out;
+  out.sources = std::move(model.buffers);
+  model.buffers.clear();
+  size_t end = 0;
+  std::vector<size_t> embedded;  // images moved into a buffer view here
   for (size_t v = 0; v < model.bufferViews.size(); ++v) {
     tinygltf::BufferView& view = model.bufferViews[v];
     std::string where = "/bufferViews/" + std::to_string(v);
-    if (view.buffer < 0 || view.buffer >= static_cast<int>(source.buffers.size()))
+    if (view.buffer < 0 || view.buffer >= static_cast<int>(out.sources.size()))
       fail("GLTF_PARSE_FAILED", where, "refers to a missing buffer " + std::to_string(view.buffer));
-    const std::vector<unsigned char>& data = source.buffers[view.buffer].data;
+    const std::vector<unsigned char>& data = out.sources[view.buffer].data;
     if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
       fail("GLTF_PARSE_FAILED", where, "lies outside its buffer (" + std::to_string(data.size()) + " bytes)");
-    view.byteOffset = appendAligned(&bytes, data.data() + view.byteOffset, view.byteLength, view.byteOffset);
+    const size_t offset = alignedLike(end, view.byteOffset);
+    out.pieces.push_back(BinPiece{data.data() + view.byteOffset, view.byteLength, offset});
+    end = offset + view.byteLength;
+    view.byteOffset = offset;
     view.buffer = 0;
   }
   for (size_t i = 0; i < model.images.size(); ++i) {
@@ -99,20 +120,120 @@ tinygltf::Model standAloneCopy(const tinygltf::Model& source) {
     tinygltf::BufferView view;
     view.buffer = 0;
     view.byteLength = image.image.size();
-    view.byteOffset = appendAligned(&bytes, image.image.data(), image.image.size(), 0);
+    view.byteOffset = alignedLike(end, 0);
     view.name = image.name;
+    end = view.byteOffset + view.byteLength;
     model.bufferViews.push_back(view);
     image.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
     image.mimeType = imageMimeType(image, image.image);
     image.uri.clear();
+    embedded.push_back(i);
   }
-  model.buffers.clear();
-  if (!model.bufferViews.empty()) {
-    tinygltf::Buffer buffer;
-    buffer.data = std::move(bytes);
-    model.buffers.push_back(std::move(buffer));
+  // The images' pieces point into the images' own bytes, which keep their address when the model
+  // (and so its images vector) is moved into `out`.
+  out.model = std::move(model);
+  for (size_t i : embedded) {
+    const tinygltf::Image& image = out.model.images[i];
+    out.pieces.push_back(BinPiece{image.image.data(), image.image.size(), out.model.bufferViews[image.bufferView].byteOffset});
   }
-  return model;
+  out.bin_size = end;
+  if (!out.model.bufferViews.empty()) out.model.buffers.emplace_back();
+  return out;
+}
+
+// Appends everything written to it to a string the caller owns, so the serialized bytes are not
+// copied out of an ostringstream a second time.
+class StringAppender : public std::streambuf {
+ public:
+  explicit StringAppender(std::string* out) : out_(out) {}
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (!traits_type::eq_int_type(c, traits_type::eof())) out_->push_back(traits_type::to_char_type(c));
+    return traits_type::not_eof(c);
+  }
+  std::streamsize xsputn(const char* data, std::streamsize size) override {
+    out_->append(data, static_cast<size_t>(size));
+    return size;
+  }
+
+ private:
+  std::string* out_;
+};
+
+void writeLittleEndian32(std::string* out, size_t offset, uint32_t value) {
+  for (int b = 0; b < 4; ++b) (*out)[offset + b] = static_cast<char>((value >> (8 * b)) & 0xff);
+}
+
+// tinygltf's GLB bytes for `model` with buffer 0 empty, reassembled with the BIN chunk `layout` lays
+// out. The JSON is tinygltf's, but for buffer 0's byteLength, which it writes as 0 (the size of the
+// data it was given) and which becomes the merged size: tinygltf writes a buffer with no name or
+// extras as {"byteLength":N}, the first element of the top-level "buffers" array.
+std::string assembleGlb(const StandAlone& layout) {
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(nullptr, nullptr);
+  std::string empty_glb;
+  {
+    StringAppender appender(&empty_glb);
+    std::ostream stream(&appender);
+    if (!writer.WriteGltfSceneToStream(&layout.model, stream, /*prettyPrint=*/false, /*writeBinary=*/true))
+      fail("INTERNAL", "", "tinygltf could not serialize the model");
+  }
+  // Header (12 bytes), JSON chunk length and type (8), then the JSON padded with spaces.
+  uint32_t json_chunk = 0;
+  for (int b = 0; b < 4; ++b) json_chunk |= static_cast<uint32_t>(static_cast<unsigned char>(empty_glb[12 + b])) << (8 * b);
+  std::string json = empty_glb.substr(20, json_chunk);
+  while (!json.empty() && json.back() == ' ') json.pop_back();
+  std::string().swap(empty_glb);
+  if (!layout.model.buffers.empty()) {
+    const std::string placeholder = "\"buffers\":[{\"byteLength\":0}]";
+    size_t at = std::string::npos;
+    int depth = 0;
+    bool in_string = false, escaped = false;
+    for (size_t i = 0; i < json.size() && at == std::string::npos; ++i) {
+      const char c = json[i];
+      if (in_string) {
+        if (escaped) escaped = false;
+        else if (c == '\\') escaped = true;
+        else if (c == '"') in_string = false;
+      } else if (c == '"') {
+        if (depth == 1 && json.compare(i, placeholder.size(), placeholder) == 0) at = i;
+        in_string = true;
+      } else if (c == '{' || c == '[') {
+        ++depth;
+      } else if (c == '}' || c == ']') {
+        --depth;
+      }
+    }
+    if (at == std::string::npos) fail("INTERNAL", "", "tinygltf wrote the merged buffer in an unexpected form");
+    const std::string length_key = "\"buffers\":[{\"byteLength\":";
+    json.replace(at + length_key.size(), 1, std::to_string(layout.bin_size));
+  }
+  const size_t json_padded = (json.size() + 3) / 4 * 4;
+  const size_t bin_padded = (layout.bin_size + 3) / 4 * 4;
+  const size_t total = 12 + 8 + json_padded + (layout.bin_size > 0 ? 8 + bin_padded : 0);
+  std::string glb;
+  glb.reserve(total);
+  glb.append("glTF", 4);
+  glb.append(8, '\0');
+  writeLittleEndian32(&glb, 4, 2);
+  writeLittleEndian32(&glb, 8, static_cast<uint32_t>(total));
+  glb.append(8, '\0');
+  writeLittleEndian32(&glb, 12, static_cast<uint32_t>(json_padded));
+  writeLittleEndian32(&glb, 16, 0x4E4F534A);  // "JSON"
+  glb.append(json);
+  glb.append(json_padded - json.size(), ' ');
+  if (layout.bin_size > 0) {
+    const size_t chunk = glb.size();
+    glb.append(8, '\0');
+    writeLittleEndian32(&glb, chunk, static_cast<uint32_t>(bin_padded));
+    writeLittleEndian32(&glb, chunk + 4, 0x004E4942);  // "BIN"
+    const size_t bin = glb.size();
+    glb.append(bin_padded, '\0');  // the alignment padding between pieces and at the end stays zero
+    for (const BinPiece& piece : layout.pieces)
+      if (piece.size > 0) std::memcpy(&glb[bin + piece.offset], piece.data, piece.size);
+  }
+  return glb;
 }
 
 }  // namespace
@@ -123,18 +244,29 @@ std::string glbOf(const std::string& path, const GltfDocument& document) {
   return isBinaryGltfPath(path) ? readFile(path) : serializeGltf(modelOf(document), true);
 }
 
-std::string serializeGltf(const tinygltf::Model& model, bool binary) {
-  tinygltf::Model stand_alone = standAloneCopy(model);
+std::string serializeGltf(tinygltf::Model model, bool binary) {
+  StandAlone layout = standAloneLayout(std::move(model));
+  if (binary) return assembleGlb(layout);
+  // A .gltf embeds the buffer as base64: tinygltf needs the merged bytes in the model.
+  if (!layout.model.buffers.empty()) {
+    std::vector<unsigned char>& bytes = layout.model.buffers[0].data;
+    bytes.assign(layout.bin_size, 0);
+    for (const BinPiece& piece : layout.pieces)
+      if (piece.size > 0) std::memcpy(bytes.data() + piece.offset, piece.data, piece.size);
+  }
+  std::vector<tinygltf::Buffer>().swap(layout.sources);
   tinygltf::TinyGLTF writer;
   writer.SetImageWriter(nullptr, nullptr);
-  std::ostringstream stream;
-  if (!writer.WriteGltfSceneToStream(&stand_alone, stream, /*prettyPrint=*/!binary, binary))
+  std::string text;
+  StringAppender appender(&text);
+  std::ostream stream(&appender);
+  if (!writer.WriteGltfSceneToStream(&layout.model, stream, /*prettyPrint=*/true, /*writeBinary=*/false))
     fail("INTERNAL", "", "tinygltf could not serialize the model");
-  return stream.str();
+  return text;
 }
 
-void writeGltf(const tinygltf::Model& model, const std::string& path) {
-  writeFileAtomically(path, serializeGltf(model, isBinaryGltfPath(path)));
+void writeGltf(tinygltf::Model model, const std::string& path) {
+  writeFileAtomically(path, serializeGltf(std::move(model), isBinaryGltfPath(path)));
 }
 
 }  // namespace rigbake

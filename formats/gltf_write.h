@@ -18,11 +18,13 @@ struct GltfDocument;  // formats/gltf_document.h
 // The bytes of the file. `binary` selects GLB. Throws Error GLTF_PARSE_FAILED (with a JSON pointer)
 // when a buffer view lies outside its buffer, and INTERNAL when an image holds decoded pixels instead
 // of its encoded file bytes.
-std::string serializeGltf(const tinygltf::Model& model, bool binary);
+// Takes the model by value: move a model in that is not needed afterwards, so its buffers are not
+// copied (the GLB is assembled straight from them).
+std::string serializeGltf(tinygltf::Model model, bool binary);
 
 // Binary when `path` ends in .glb or .vrm (any case), JSON otherwise. Throws IO_WRITE_FAILED; a
 // failed write leaves no file behind.
-void writeGltf(const tinygltf::Model& model, const std::string& path);
+void writeGltf(tinygltf::Model model, const std::string& path);
 
 // True for paths that writeGltf writes as GLB.
 bool isBinaryGltfPath(const std::string& path);

@@ -311,6 +311,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
     part.batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, &pivots);
     const SkinningBatch& batch = part.batch;
     std::vector<std::uint32_t> lane_of_skinned(positions.size(), 0);
+    part.welded_of_lane.reserve(kSkinLanes * batch.groups());  // lives through the pass: no slack
     for (size_t g = 0; g < batch.groups(); ++g) {
       for (size_t lane = 0; lane < kSkinLanes; ++lane) {
         const int v = batch.vertex[kSkinLanes * g + lane];

@@ -118,12 +118,33 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
                                         joints.begin() + b.first + b.count);
   });
 
-  SkinningBatch batch;
-  batch.centre = centre;
-  batch.first_slot.push_back(0);
+  // The groups first, so that every array of the batch is allocated once at its final size: grown by
+  // push_back they would hold up to twice their size for as long as the batch lives, and the batches of
+  // every part and weight set live through the whole deformation pass.
+  std::vector<size_t> group_end;
+  size_t slot_total = 0;
   for (size_t begin = 0; begin < order.size();) {
     size_t end = begin + 1;
     while (end < order.size() && end - begin < kSkinLanes && sameJoints(slots[order[begin]], slots[order[end]])) ++end;
+    group_end.push_back(end);
+    slot_total += slots[order[begin]].count;
+    begin = end;
+  }
+  const size_t groups = group_end.size();
+
+  SkinningBatch batch;
+  batch.centre = centre;
+  batch.vertex.reserve(kSkinLanes * groups);
+  batch.positions.reserve(3 * groups);
+  batch.first_slot.reserve(groups + 1);
+  batch.joints.reserve(slot_total);
+  batch.weights.reserve(static_cast<size_t>(kSkinSets) * slot_total);
+  batch.dual_quaternion_slots.reserve(groups);
+  batch.pivot_row.reserve(groups);
+  batch.inverse_total.reserve(groups);
+  batch.first_slot.push_back(0);
+  size_t begin = 0;
+  for (const size_t end : group_end) {
     const VertexSlots& shared = slots[order[begin]];
     Float4 x, y, z, inverse_total;
     splat(1.0f, &inverse_total);
