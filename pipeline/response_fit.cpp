@@ -289,6 +289,9 @@ struct FitPart {
   std::vector<int> welded_of_lane;  // kSkinLanes per group: welded index, -1 for an empty lane
   SkinningBatch moving_batch;
   std::vector<int> moving_of_lane;  // kSkinLanes per group: moving index, -1 for an empty lane
+  // The same with -1 also for the moving vertices no rim or cap touches: only those are needed in double
+  // (the triangle pass reads single precision), so only those are converted.
+  std::vector<int> rim_of_lane;
   // Each lane's bind position in double, in lane order (zero for an empty lane).
   std::vector<Eigen::Vector3d> welded_bind, moving_bind;
 };
@@ -695,6 +698,16 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
                                            std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
     part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
     part.moving_bind = bindOfLane(part.moving_batch, part.mesh->positions);
+    {
+      std::vector<char> on_rim(part.moving_vertices.size(), 0);
+      for (const SplitPatch& split : part.patches) {
+        for (int c : split.rim_touched) on_rim[static_cast<size_t>(c)] = 1;
+      }
+      part.rim_of_lane = part.moving_of_lane;
+      for (int& c : part.rim_of_lane) {
+        if (c >= 0 && !on_rim[static_cast<size_t>(c)]) c = -1;
+      }
+    }
     fit_parts.push_back(std::move(part));
   }
   // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
@@ -960,7 +973,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         posed[p].resize(part.moving_vertices.size());
         planar[p].resize(part.moving_vertices.size());
         skinSkinningBatch<1u>(part.moving_batch, float_frame, 0, part.moving_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
-          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_bind, &posed[p]);
+          storeSkinned(group, g, 0, part.rim_of_lane, part.moving_bind, &posed[p]);
           storePlanar(group, g, part.moving_of_lane, &planar[p]);
         });
         // The body's gradient at the moving vertices is kept: the body row's Jacobian, the inner
