@@ -289,6 +289,9 @@ struct FitPart {
   std::vector<int> welded_of_lane;  // kSkinLanes per group: welded index, -1 for an empty lane
   SkinningBatch moving_batch;
   std::vector<int> moving_of_lane;  // kSkinLanes per group: moving index, -1 for an empty lane
+  // The same with -1 also for the moving vertices no rim or cap touches: only those are needed in double
+  // (the triangle pass reads single precision), so only those are converted.
+  std::vector<int> rim_of_lane;
   // Each lane's bind position in double, in lane order (zero for an empty lane).
   std::vector<Eigen::Vector3d> welded_bind, moving_bind;
 };
@@ -345,34 +348,69 @@ struct MuscleSums {
 // (o, a, b, c), (a - o) . n, and its area vector n = (b - a) x (c - a), from which its term about
 // another point o + d follows, minus d . n. The whole surface's pass keeps these, and each region's
 // moving triangles, all among the whole surface's, are summed from them about the region's own point.
-struct TriangleTerm {
-  double volume = 0.0;
-  Eigen::Vector3d area = Eigen::Vector3d::Zero();
+// Single precision, as the figures sum the same terms (pipeline/deformation_quality.cpp): the area
+// vector in lanes 0-2 of `area` (lane 3 zero) and the term in `volume`.
+struct TriangleTerms {
+  std::vector<Float4> area;
+  std::vector<float> volume;
 };
 
-// Six times the volume of `triangles` about `origin` (enclosedVolumeAbout()'s sum over triangles, as
-// the figures form each term: pipeline/deformation_quality.cpp), each triangle's TriangleTerm, and a
-// sixth of its area vector added to the gradient at its corners: the volume gradient at a vertex whose
-// fan is closed (SplitPatch), in one pass with one cross product per triangle.
-double sumTriangles(const std::vector<std::array<int, 3>>& triangles, const std::vector<Eigen::Vector3d>& posed,
-                    const Eigen::Vector3d& origin, std::vector<Eigen::Vector3d>* gradient, std::vector<TriangleTerm>* terms) {
+// A moving vertex's posed position about the skin centre, x, y, z in lanes 0-2 and zero in lane 3:
+// one aligned load per corner, and the cross product is two shuffles per operand instead of a gather
+// of four triangles into lanes.
+void storePlanar(const SkinnedGroup& group, size_t g, const std::vector<int>& index_of_lane, std::vector<Float4>* planar) {
+  __m128 x = _mm_add_ps(group.x, group.offset[0][0]), y = _mm_add_ps(group.y, group.offset[0][1]);
+  __m128 z = _mm_add_ps(group.z, group.offset[0][2]), w = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(x, y, z, w);
+  const __m128 lanes[kSkinLanes] = {x, y, z, w};
+  for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+    const int index = index_of_lane[kSkinLanes * g + lane];
+    if (index >= 0) _mm_store_ps((*planar)[static_cast<size_t>(index)].v, lanes[lane]);
+  }
+}
+
+// Six times the volume of `triangles` about `origin` (enclosedVolumeAbout()'s sum over triangles, each
+// term formed in single precision as the figures form it and added in double), each triangle's terms,
+// and a sixth of its area vector added to the gradient at its corners: the volume gradient at a vertex
+// whose fan is closed (SplitPatch), in one pass with one cross product per triangle. About 100
+// instructions per triangle in double with Eigen's 3-vectors; here the corners are one register each.
+double sumTriangles(const std::vector<std::array<int, 3>>& triangles, const std::vector<Float4>& planar, __m128 origin,
+                    std::vector<Eigen::Vector3d>* gradient, TriangleTerms* terms) {
   std::vector<Eigen::Vector3d>& g = *gradient;
-  terms->resize(triangles.size());
-  constexpr double kSixth = 1.0 / 6.0;
+  terms->area.resize(triangles.size());
+  terms->volume.resize(triangles.size());
+  const __m128 sixth = _mm_set1_ps(1.0f / 6.0f);
   double volume = 0.0;
   for (size_t i = 0; i < triangles.size(); ++i) {
     const std::array<int, 3>& t = triangles[i];
-    const Eigen::Vector3d& a = posed[t[0]];
-    const Eigen::Vector3d area = (posed[t[1]] - a).cross(posed[t[2]] - a);
-    const double term = (a - origin).dot(area);
-    volume += term;
-    const Eigen::Vector3d share = kSixth * area;
-    g[t[0]] += share;
-    g[t[1]] += share;
-    g[t[2]] += share;
-    (*terms)[i] = {term, area};
+    const __m128 a = _mm_load_ps(planar[static_cast<size_t>(t[0])].v);
+    const __m128 u = _mm_sub_ps(_mm_load_ps(planar[static_cast<size_t>(t[1])].v), a);
+    const __m128 v = _mm_sub_ps(_mm_load_ps(planar[static_cast<size_t>(t[2])].v), a);
+    // u x v = u.yzx * v.zxy - u.zxy * v.yzx; lane 3 stays zero.
+    const __m128 area =
+        _mm_sub_ps(_mm_mul_ps(_mm_shuffle_ps(u, u, _MM_SHUFFLE(3, 0, 2, 1)), _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 1, 0, 2))),
+                   _mm_mul_ps(_mm_shuffle_ps(u, u, _MM_SHUFFLE(3, 1, 0, 2)), _mm_shuffle_ps(v, v, _MM_SHUFFLE(3, 0, 2, 1))));
+    const __m128 product = _mm_mul_ps(_mm_sub_ps(a, origin), area);
+    const __m128 pair = _mm_add_ps(product, _mm_movehl_ps(product, product));  // x + z, y + 0
+    const __m128 term = _mm_add_ss(pair, _mm_shuffle_ps(pair, pair, _MM_SHUFFLE(1, 1, 1, 1)));
+    _mm_store_ps(terms->area[i].v, area);
+    _mm_store_ss(&terms->volume[i], term);
+    volume += static_cast<double>(_mm_cvtss_f32(term));
+    const __m128 share = _mm_mul_ps(area, sixth);
+    const __m128d share_xy = _mm_cvtps_pd(share), share_z = _mm_cvtps_pd(_mm_movehl_ps(share, share));
+    for (int k = 0; k < 3; ++k) {
+      double* corner = g[static_cast<size_t>(t[k])].data();
+      _mm_storeu_pd(corner, _mm_add_pd(_mm_loadu_pd(corner), share_xy));
+      _mm_store_sd(corner + 2, _mm_add_sd(_mm_load_sd(corner + 2), share_z));
+    }
   }
   return volume;
+}
+
+// A point about the skin centre in a register's lanes 0-2, as storePlanar() lays out positions.
+__m128 planarPoint(const Eigen::Vector3d& point, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d d = point - centre;
+  return _mm_set_ps(0.0f, static_cast<float>(d.z()), static_cast<float>(d.y()), static_cast<float>(d.x()));
 }
 
 // `rows` (those with keep[r] set, or all when keep is null) as the rows of one matrix, in their order:
@@ -660,6 +698,16 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
                                            std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
     part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
     part.moving_bind = bindOfLane(part.moving_batch, part.mesh->positions);
+    {
+      std::vector<char> on_rim(part.moving_vertices.size(), 0);
+      for (const SplitPatch& split : part.patches) {
+        for (int c : split.rim_touched) on_rim[static_cast<size_t>(c)] = 1;
+      }
+      part.rim_of_lane = part.moving_of_lane;
+      for (int& c : part.rim_of_lane) {
+        if (c >= 0 && !on_rim[static_cast<size_t>(c)]) c = -1;
+      }
+    }
     fit_parts.push_back(std::move(part));
   }
   // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
@@ -811,7 +859,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
     std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size()), moved(fit_parts.size());
     std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size()), normals(fit_parts.size());
-    std::vector<std::vector<TriangleTerm>> terms(fit_parts.size());
+    std::vector<std::vector<Float4>> planar(fit_parts.size());
+    std::vector<TriangleTerms> terms(fit_parts.size());
     std::vector<std::vector<MuscleSums>> body_shares(fit_parts.size());  // per part, per muscle slot
     std::vector<MuscleKeyMotion> key_motion(muscle_count);
     std::vector<MuscleSums> sums(muscle_count);
@@ -922,8 +971,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       for (size_t p = 0; p < fit_parts.size(); ++p) {
         const FitPart& part = fit_parts[p];
         posed[p].resize(part.moving_vertices.size());
+        planar[p].resize(part.moving_vertices.size());
         skinSkinningBatch<1u>(part.moving_batch, float_frame, 0, part.moving_batch.groups(), [&](size_t g, const SkinnedGroup& group) {
-          storeSkinned(group, g, 0, part.moving_of_lane, part.moving_bind, &posed[p]);
+          storeSkinned(group, g, 0, part.rim_of_lane, part.moving_bind, &posed[p]);
+          storePlanar(group, g, part.moving_of_lane, &planar[p]);
         });
         // The body's gradient at the moving vertices is kept: the body row's Jacobian, the inner
         // vertices' of every region, then (normalized) the skin rows' normals.
@@ -931,7 +982,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const SplitPatch& whole = part.patches[0];
         if (whole.first_vertex < 0) continue;  // no triangles: nor has any region
         const FixedVolume& whole_fixed = fixed_volume[i][p * patch_count];
-        const double whole_sum = sumTriangles(whole.moving.triangles, posed[p], whole_fixed.origin, &normals[p], &terms[p]);
+        const double whole_sum = sumTriangles(whole.moving.triangles, planar[p], planarPoint(whole_fixed.origin, skin_centre),
+                                              &normals[p], &terms[p]);
         body += whole_fixed.volume + whole_sum / 6.0 + enclosedVolumeAbout(whole.moving_holes, posed[p], whole_fixed.origin);
         if (!whole.rim_fitted.empty()) {
           std::vector<Eigen::Vector3d>& gradient = gradients[p];
@@ -945,11 +997,16 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
           const FixedVolume& fixed = fixed_volume[i][p * patch_count + k];
           const Eigen::Vector3d shift = fixed.origin - whole_fixed.origin;
           double sum = 0.0;
-          Eigen::Vector3d area = Eigen::Vector3d::Zero();
+          __m128d area_xy = _mm_setzero_pd(), area_z = _mm_setzero_pd();
           for (int t : split.whole_triangles) {
-            sum += terms[p][static_cast<size_t>(t)].volume;
-            area += terms[p][static_cast<size_t>(t)].area;
+            sum += static_cast<double>(terms[p].volume[static_cast<size_t>(t)]);
+            const __m128 term_area = _mm_load_ps(terms[p].area[static_cast<size_t>(t)].v);
+            area_xy = _mm_add_pd(area_xy, _mm_cvtps_pd(term_area));
+            area_z = _mm_add_pd(area_z, _mm_cvtps_pd(_mm_movehl_ps(term_area, term_area)));
           }
+          Eigen::Vector3d area;
+          _mm_storeu_pd(area.data(), area_xy);
+          _mm_store_sd(area.data() + 2, area_z);
           region_volume[k - 1] += fixed.volume + (sum - shift.dot(area)) / 6.0 + enclosedVolumeAbout(split.moving_holes, posed[p], fixed.origin);
         }
       }
