@@ -161,6 +161,19 @@ class StringAppender : public std::streambuf {
   std::string* out_;
 };
 
+// tinygltf's serialization of `model` (its buffers' data embedded as base64 in JSON, or in the BIN chunk
+// of a GLB), images as they are in their buffer views.
+std::string tinygltfBytes(const tinygltf::Model& model, bool binary) {
+  tinygltf::TinyGLTF writer;
+  writer.SetImageWriter(nullptr, nullptr);
+  std::string bytes;
+  StringAppender appender(&bytes);
+  std::ostream stream(&appender);
+  if (!writer.WriteGltfSceneToStream(&model, stream, /*prettyPrint=*/!binary, /*writeBinary=*/binary))
+    fail("INTERNAL", "", "tinygltf could not serialize the model");
+  return bytes;
+}
+
 void writeLittleEndian32(std::string* out, size_t offset, uint32_t value) {
   for (int b = 0; b < 4; ++b) (*out)[offset + b] = static_cast<char>((value >> (8 * b)) & 0xff);
 }
@@ -170,15 +183,7 @@ void writeLittleEndian32(std::string* out, size_t offset, uint32_t value) {
 // data it was given) and which becomes the merged size: tinygltf writes a buffer with no name or
 // extras as {"byteLength":N}, the first element of the top-level "buffers" array.
 std::string assembleGlb(const StandAlone& layout) {
-  tinygltf::TinyGLTF writer;
-  writer.SetImageWriter(nullptr, nullptr);
-  std::string empty_glb;
-  {
-    StringAppender appender(&empty_glb);
-    std::ostream stream(&appender);
-    if (!writer.WriteGltfSceneToStream(&layout.model, stream, /*prettyPrint=*/false, /*writeBinary=*/true))
-      fail("INTERNAL", "", "tinygltf could not serialize the model");
-  }
+  std::string empty_glb = tinygltfBytes(layout.model, /*binary=*/true);
   // Header (12 bytes), JSON chunk length and type (8), then the JSON padded with spaces.
   uint32_t json_chunk = 0;
   for (int b = 0; b < 4; ++b) json_chunk |= static_cast<uint32_t>(static_cast<unsigned char>(empty_glb[12 + b])) << (8 * b);
@@ -255,14 +260,7 @@ std::string serializeGltf(tinygltf::Model model, bool binary) {
       if (piece.size > 0) std::memcpy(bytes.data() + piece.offset, piece.data, piece.size);
   }
   std::vector<tinygltf::Buffer>().swap(layout.sources);
-  tinygltf::TinyGLTF writer;
-  writer.SetImageWriter(nullptr, nullptr);
-  std::string text;
-  StringAppender appender(&text);
-  std::ostream stream(&appender);
-  if (!writer.WriteGltfSceneToStream(&layout.model, stream, /*prettyPrint=*/true, /*writeBinary=*/false))
-    fail("INTERNAL", "", "tinygltf could not serialize the model");
-  return text;
+  return tinygltfBytes(layout.model, /*binary=*/false);
 }
 
 void writeGltf(tinygltf::Model model, const std::string& path) {
