@@ -193,6 +193,17 @@ bool sameSlots(const InfluenceSet& set, size_t a, size_t b) {
 
 }  // namespace
 
+Eigen::Vector3d skinCentre(const Character& character, const std::vector<MeasuredPart>& parts) {
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (const MeasuredPart& part : parts) {
+    for (const Eigen::Vector3d& p : character.meshes[part.mesh_part].positions) {
+      low = low.cwiseMin(p);
+      high = high.cwiseMax(p);
+    }
+  }
+  return low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+}
+
 DeformationMeasures measureDeformation(const Character& character, const std::vector<BodyRegion>& regions,
                                        const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
                                        const std::vector<MeasuredClip>& clips, bool quality,
@@ -263,16 +274,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
 
   // Each part's vertices for the pass: the welded ones (volumes), and for the error every other vertex
   // whose position or weights differ from its welded vertex's (an exact copy has the same error).
-  // Single-precision positions are about the middle of every part's bounding box, so that their
-  // rounding is relative to the body's size.
-  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
-  for (const MeasuredPart& part : parts) {
-    for (const Eigen::Vector3d& p : character.meshes[part.mesh_part].positions) {
-      low = low.cwiseMin(p);
-      high = high.cwiseMax(p);
-    }
-  }
-  const Eigen::Vector3d centre = low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d centre = skinCentre(character, parts);
   DualQuaternionPivots pivots;
   size_t widest_surface = 0;
   for (size_t p = 0; p < parts.size(); ++p) {

@@ -36,6 +36,11 @@ struct MeasuredPart {
   InfluenceSet rig;    // the weights written (muscles included)
 };
 
+// The point single-precision skinning of `parts` is done about (pipeline/skinning_batch.h): the middle
+// of their vertices' bounding box, so that the rounding is relative to the body's size, not to its
+// distance from the scene origin (the origin when there are no finite positions).
+Eigen::Vector3d skinCentre(const Character& character, const std::vector<MeasuredPart>& parts);
+
 // The volume change V(t) / V(bind) - 1 with the largest magnitude over a clip, and when.
 struct VolumeExtreme {
   double change = 0.0;

@@ -590,17 +590,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     if (measured.region_measured[r]) kept.push_back(r);
   }
   const int region_count = static_cast<int>(kept.size());
-  // Single-precision positions are about the middle of every part's bounding box, as the figures take
-  // them (pipeline/deformation_quality.cpp), so that their rounding is relative to the body's size.
-  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
-  for (const MeasuredPart& part : parts) {
-    for (const Eigen::Vector3d& position : character.meshes[part.mesh_part].positions) {
-      low = low.cwiseMin(position);
-      high = high.cwiseMax(position);
-    }
-  }
-  const Eigen::Vector3d skin_centre =
-      low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  // Single precision about the same point as the figures skin about.
+  const Eigen::Vector3d skin_centre = skinCentre(character, parts);
   DualQuaternionPivots no_pivots;  // the fit skins by linear blending only
   std::vector<FitPart> fit_parts;
   std::vector<Eigen::Affine3d> bind_inverse(muscle_count);
