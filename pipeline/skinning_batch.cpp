@@ -38,55 +38,60 @@ void splat(float value, Float4* out) {
   for (float& lane : out->v) lane = value;
 }
 
+// One vertex's joints over every set, ascending, with each set's weight summed in double (plus minus
+// minus); set 0's total and first joint go into `vertex`. Ascending joints make each set's sum
+// independent of the other sets: a joint only another set uses adds an exact zero to it.
+void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v,
+                std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>>* sorted, VertexSlots* vertex) {
+  sorted->clear();
+  vertex->set0_total = 0.0;
+  vertex->pivot = -1;
+  auto slotOf = [&](int joint) {
+    for (size_t k = 0; k < sorted->size(); ++k)
+      if ((*sorted)[k].first == joint) return k;
+    if (joint < 0 || joint > std::numeric_limits<std::uint16_t>::max())
+      fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " out of range");
+    sorted->push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
+    return sorted->size() - 1;
+  };
+  for (int set = 0; set < kSkinSets; ++set) {
+    for (int sign = 0; sign < 2; ++sign) {
+      const InfluenceSet* influences = sign == 0 ? sets[set].plus : sets[set].minus;
+      if (influences == nullptr) continue;
+      const size_t count = static_cast<size_t>(influences->slots_per_vertex);
+      for (size_t k = 0; k < count; ++k) {
+        const double weight = influences->weights[v * count + k];
+        if (weight == 0.0) continue;
+        const int joint = influences->joints[v * count + k];
+        (*sorted)[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
+        if (set == 0 && sign == 0) {
+          vertex->set0_total += weight;
+          if (vertex->pivot < 0) vertex->pivot = joint;
+        }
+      }
+    }
+  }
+  std::sort(sorted->begin(), sorted->end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+}
+
 }  // namespace
 
 SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positions, const std::vector<int>& vertices,
                                  const Eigen::Vector3d& centre, const std::array<SetWeights, kSkinSets>& sets,
                                  const std::vector<char>& dual_quaternions, int dual_quaternion_joints,
                                  DualQuaternionPivots* pivots) {
-  // Each vertex's joints, ascending, and their weight in each set, in double until they are complete.
-  // Ascending joints make each set's sum independent of the other sets: a joint only another set uses
-  // adds an exact zero to it.
+  // Each vertex's joints, ascending. Their weights in each set are summed in double, here and again
+  // when the groups are laid out (the same sums in the same order, so the same bits): keeping every
+  // vertex's double weights until then took 32 bytes per slot, the bake's peak at 100k vertices.
   std::vector<VertexSlots> slots(vertices.size());
   std::vector<std::uint16_t> joints;
-  std::vector<std::array<double, kSkinSets>> weights;
   std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>> sorted;
   for (size_t i = 0; i < vertices.size(); ++i) {
-    const size_t v = static_cast<size_t>(vertices[i]);
     VertexSlots& vertex = slots[i];
-    sorted.clear();
-    auto slotOf = [&](int joint) {
-      for (size_t k = 0; k < sorted.size(); ++k)
-        if (sorted[k].first == joint) return k;
-      if (joint < 0 || joint > std::numeric_limits<std::uint16_t>::max())
-        fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " out of range");
-      sorted.push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
-      return sorted.size() - 1;
-    };
-    for (int set = 0; set < kSkinSets; ++set) {
-      for (int sign = 0; sign < 2; ++sign) {
-        const InfluenceSet* influences = sign == 0 ? sets[set].plus : sets[set].minus;
-        if (influences == nullptr) continue;
-        const size_t count = static_cast<size_t>(influences->slots_per_vertex);
-        for (size_t k = 0; k < count; ++k) {
-          const double weight = influences->weights[v * count + k];
-          if (weight == 0.0) continue;
-          const int joint = influences->joints[v * count + k];
-          sorted[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
-          if (set == 0 && sign == 0) {
-            vertex.set0_total += weight;
-            if (vertex.pivot < 0) vertex.pivot = joint;
-          }
-        }
-      }
-    }
-    std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    mergeSlots(sets, static_cast<size_t>(vertices[i]), &sorted, &vertex);
     vertex.first = static_cast<std::uint32_t>(joints.size());
     vertex.count = static_cast<std::uint32_t>(sorted.size());
-    for (const auto& [joint, joint_weights] : sorted) {
-      joints.push_back(joint);
-      weights.push_back(joint_weights);
-    }
+    for (const auto& slot : sorted) joints.push_back(slot.first);
     if (dual_quaternions[i] && sets[0].plus != nullptr && vertex.pivot >= 0) {
       // Set 0's joints are the lowest ones below dual_quaternion_joints (the others' skeleton joints
       // blend in with weight 0).
@@ -165,14 +170,17 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
     batch.inverse_total.push_back(inverse_total);
     batch.dual_quaternion_slots.push_back(shared.dual_quaternion_slots);
     batch.pivot_row.push_back(shared.pivot >= 0 ? pivots->rowOf(shared.pivot) : 0);
-    for (std::uint32_t k = 0; k < shared.count; ++k) {
-      batch.joints.push_back(joints[shared.first + k]);
-      for (int set = 0; set < kSkinSets; ++set) {
-        Float4 lanes;
-        for (size_t lane = 0; lane + begin < end; ++lane)
-          lanes.v[lane] = static_cast<float>(weights[slots[order[begin + lane]].first + k][set]);
-        batch.weights.push_back(lanes);
-      }
+    // The group's weights, slot by slot and set by set, four lanes at a time.
+    const size_t first_weight = batch.weights.size();
+    batch.weights.resize(first_weight + static_cast<size_t>(kSkinSets) * shared.count);
+    for (std::uint32_t k = 0; k < shared.count; ++k) batch.joints.push_back(joints[shared.first + k]);
+    for (size_t lane = 0; lane + begin < end; ++lane) {
+      VertexSlots merged;
+      mergeSlots(sets, static_cast<size_t>(vertices[order[begin + lane]]), &sorted, &merged);
+      for (std::uint32_t k = 0; k < shared.count; ++k)
+        for (int set = 0; set < kSkinSets; ++set)
+          batch.weights[first_weight + static_cast<size_t>(kSkinSets) * k + static_cast<size_t>(set)].v[lane] =
+              static_cast<float>(sorted[k].second[static_cast<size_t>(set)]);
     }
     batch.first_slot.push_back(static_cast<std::uint32_t>(batch.joints.size()));
     begin = end;
