@@ -113,7 +113,8 @@ TEST_CASE("cli bake: the same inputs give byte-identical files, with or without 
   REQUIRE(runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "muscles.json")).exit_code == 0);
   for (const char* name : {"a", "b"}) {
     std::string n = name;
-    // b opts out of the restart onto huge pages (cli/huge_pages.cpp): the allocator never reaches a byte.
+    // b opts out of the restart onto huge pages and one arena (cli/huge_pages.cpp): the allocator never
+    // reaches a byte.
     REQUIRE(runCli("bake " + sampleGlbPathForCli() + " --muscles " + (dir / "muscles.json") + " --influences 7 -o " +
                    (dir / (n + ".glb")) + " --stats " + (dir / (n + ".json")) + " --packed-out " + (dir / (n + ".rbpk")),
                    n == "b" ? "GLIBC_TUNABLES=glibc.malloc.hugetlb=0" : "")
