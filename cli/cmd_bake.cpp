@@ -39,6 +39,7 @@ struct BakeCommandOptions {
   std::string gltf_weights = "milli";
   std::string regions = "body";
   std::string response = "auto";
+  int fit_poses = rigbake::ResponseFitOptions{}.max_poses;
   std::string muscle_motion = "runtime";
   bool helper_joints = false;
   std::string muscles_output;
@@ -134,6 +135,7 @@ int run(const BakeCommandOptions& options) {
   bake_options.fps = options.fps;
   bake_options.threads = options.threads;
   parseResponseMode(options.response, &bake_options.response);  // CLI11 has checked the name
+  bake_options.fit.max_poses = options.fit_poses;
   parseMuscleMotion(options.muscle_motion, &bake_options.motion);
   bake_options.helper_joints = options.helper_joints;
   bake_options.regions =
@@ -251,6 +253,11 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "
                       "nothing (docs/muscle-model.md)")
       ->check(CLI::IsMember({"auto", "fit", "keep"}))
+      ->capture_default_str();
+  command->add_option("--fit-poses", options->fit_poses,
+                      "Poses the response fit solves over, chosen from every clip's frames where they spread the "
+                      "muscles' drivers most (more: slower, closer to every frame)")
+      ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   command->add_option("--muscle-motion", options->muscle_motion,
                       "How the muscle joints move in the file: runtime = the RIGBAKE_muscle_rig extension only, for "

@@ -283,7 +283,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   }
   timing.weights += lap();
 
-  // The response fit, over poses taken evenly from every clip.
+  // The response fit, over poses chosen from every clip's frames where they spread the drivers most.
   std::vector<char> fit_part(muscle_count, 0);
   for (int m = 0; m < muscle_count; ++m)
     fit_part[m] = options.response == ResponseMode::kFit ||
@@ -293,11 +293,16 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     for (size_t c = 0; c < character.clips.size(); ++c)
       for (double time : sampleTimes(character.clips[c], options.fps)) samples.emplace_back(static_cast<int>(c), time);
     const size_t wanted = static_cast<size_t>(std::max(1, options.fit.max_poses));
-    std::vector<Pose> poses;
-    for (size_t i = 0; i < std::min(wanted, samples.size()); ++i) {
-      const auto& [clip, time] = samples[i * samples.size() / std::min(wanted, samples.size())];
-      poses.push_back(sampleClip(skeleton, character.clips[clip], time));
+    std::vector<std::vector<double>> features;
+    if (samples.size() > wanted) {
+      const runtime::MuscleRig<double> start = buildMuscleRig(rigged, skeleton);
+      for (const auto& [clip, time] : samples)
+        features.push_back(driverFeatures(start, rigged, fit_part, sampleClip(skeleton, character.clips[clip], time)));
+    } else {
+      features.resize(samples.size());
     }
+    std::vector<Pose> poses;
+    for (size_t i : chooseFitPoses(features, wanted)) poses.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
     // The prior keeps the weight it has against every frame (up to prior_poses of them) when the fit
     // takes fewer.
     ResponseFitOptions fit_options = options.fit;

@@ -461,6 +461,48 @@ double signedChange(double volume, double reference) { return reference != 0.0 ?
 
 }  // namespace
 
+std::vector<double> driverFeatures(const runtime::MuscleRig<double>& rig, const MuscleSet& muscles,
+                                   const std::vector<char>& fit, const Pose& pose) {
+  const std::vector<runtime::MuscleDrivers<double>> drivers = evaluateRig(rig, pose, false).drivers;
+  std::vector<double> features;
+  for (size_t m = 0; m < muscles.parts.size(); ++m) {
+    if (!fit[m]) continue;
+    features.push_back(drivers[m].clamped_ratio - 1.0);
+    features.push_back(sideTwist(muscles.parts[m], drivers[m]));
+  }
+  return features;
+}
+
+std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& features, size_t count) {
+  const size_t n = features.size();
+  std::vector<size_t> chosen;
+  if (n <= count) {
+    for (size_t i = 0; i < n; ++i) chosen.push_back(i);
+    return chosen;
+  }
+  auto squaredDistance = [](const std::vector<double>& a, const std::vector<double>& b) {
+    double sum = 0.0;
+    for (size_t k = 0; k < a.size(); ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
+    return sum;
+  };
+  // Distance to the nearest pose taken; rest (all features zero) counts as taken, so the first pose is
+  // the one farthest from it. Ties go to the earlier candidate.
+  std::vector<double> nearest(n);
+  for (size_t i = 0; i < n; ++i) nearest[i] = squaredDistance(features[i], std::vector<double>(features[i].size(), 0.0));
+  std::vector<char> taken(n, 0);
+  for (size_t c = 0; c < count; ++c) {
+    size_t next = n;
+    for (size_t i = 0; i < n; ++i) {
+      if (!taken[i] && (next == n || nearest[i] > nearest[next])) next = i;
+    }
+    taken[next] = 1;
+    chosen.push_back(next);
+    for (size_t i = 0; i < n; ++i) nearest[i] = std::min(nearest[i], squaredDistance(features[i], features[next]));
+  }
+  std::sort(chosen.begin(), chosen.end());
+  return chosen;
+}
+
 bool hasPresetResponse(const MusclePart& part) {
   const MuscleResponse preset = defaultResponse(part);
   auto same = [](const std::vector<ResponseKey>& a, const std::vector<ResponseKey>& b) {
@@ -551,6 +593,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
   }
   Eigen::VectorXd theta = prior;
+  // Each pose's rows stand for options.pose_weight poses of the clips: the prior is weighed against
+  // that many, so a fit over every third frame balances its terms as one over every frame would.
+  const double prior_weight = options.prior_weight / std::sqrt(std::max(options.pose_weight, 1e-6));
 
   auto applyTheta = [&](const Eigen::VectorXd& amplitudes) {
     for (int m = 0; m < muscle_count; ++m) {
@@ -1095,7 +1140,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     const double rms = std::sqrt(body_squares / static_cast<double>(poses.size()));
     if (iteration == 0) report.body_rms_before = rms;
     for (int u = 0; u < unknowns; ++u) {
-      const double prior_residual = options.prior_weight * (theta[u] - prior[u]) * std::max(reach[u], 1e-3);
+      const double prior_residual = prior_weight * (theta[u] - prior[u]) * std::max(reach[u], 1e-3);
       objective += prior_residual * prior_residual;
     }
     const bool better = objective < best_objective;
@@ -1125,7 +1170,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     Eigen::VectorXd gradient = rows.transpose() * Eigen::Map<const Eigen::VectorXd>(at.rhs.data(), rows.rows());
     for (int u = 0; u < unknowns; ++u) {
       const double unit = 1.0 / std::max(reach[u], 1e-3);
-      const double w = options.prior_weight / unit;
+      const double w = prior_weight / unit;
       normal(u, u) += w * w;
       gradient[u] += w * w * (prior[u] - theta[u]);
     }

@@ -15,11 +15,19 @@
 #include "anatomy/muscle_set.h"
 #include "pipeline/deformation_quality.h"
 #include "pipeline/pose.h"
+#include "runtime/muscle_rig.h"
 
 namespace rigbake {
 
 struct ResponseFitOptions {
-  int max_poses = 160;      // poses sampled evenly from every clip's sample times
+  // Poses fitted, chosen from every clip's sample times by chooseFitPoses(). Measured
+  // (docs/muscle-model.md, "Poses"): 64 give the mannequin's figures of 160 within 0.01 points
+  // (ArmRaise +0.28 -> +0.29 %) at 40 % of the fit's cost.
+  int max_poses = 64;
+  // How many of the clips' frames each fitted pose stands for (the bake sets it: the frames, up to
+  // prior_poses, over the poses taken). The prior is weighed against the poses times this.
+  double pose_weight = 1.0;
+  int prior_poses = 160;
   // Levenberg-Marquardt steps (each re-linearizes the volumes). Measured on the mannequin: after five
   // the figures move by 0.02 points or less.
   int iterations = 6;
@@ -83,6 +91,18 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
                                      const std::vector<MeasuredPart>& parts, const std::vector<Pose>& poses,
                                      const std::vector<char>& fit, MuscleSet* muscles,
                                      const ResponseFitOptions& options = {}, int threads = 1);
+
+// Where a pose puts the fitted parts' drivers (fit[m] set): each one's clamped length ratio and its
+// twist in quarter turns, the quantities the response keys are read at. For chooseFitPoses().
+std::vector<double> driverFeatures(const runtime::MuscleRig<double>& rig, const MuscleSet& muscles,
+                                   const std::vector<char>& fit, const Pose& pose);
+
+// `count` of the candidate poses (their driverFeatures()) for the fit, spread over the drivers'
+// range by farthest-point sampling: first the pose farthest from rest, then each time the one farthest
+// from every pose taken. Returned ascending (the candidates' order); all of them when there are no
+// more than `count`. Even spacing in time leaves a brief extreme pose (a roll, a fall) between two
+// samples; this takes the extremes first.
+std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& features, size_t count);
 
 // True when `part` still has the response its preset gives it (defaultResponse()): what
 // `bake --response auto` fits. Curves that were fitted before or edited by hand are kept.
