@@ -241,6 +241,9 @@ std::vector<std::array<int, 3>> readTriangles(const tinygltf::Model& model, cons
   }
   std::vector<std::array<int, 3>> triangles;
   int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
+  // At its final size: grown by push_back the mesh's triangles kept up to twice their bytes for the
+  // whole bake.
+  triangles.reserve(mode == TINYGLTF_MODE_TRIANGLES ? indices.size() / 3 : indices.size());
   if (mode == TINYGLTF_MODE_TRIANGLES) {
     for (size_t i = 0; i + 2 < indices.size(); i += 3) triangles.push_back({indices[i], indices[i + 1], indices[i + 2]});
   } else if (mode == TINYGLTF_MODE_TRIANGLE_STRIP) {

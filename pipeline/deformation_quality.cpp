@@ -344,6 +344,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       std::iota(order.begin(), order.end(), 0);
       std::stable_sort(order.begin(), order.end(),
                        [&](size_t a, size_t b) { return part.region_of_triangle[a] < part.region_of_triangle[b]; });
+      part.ordered_triangles.reserve(order.size());
       for (size_t i : order) {
         const int region = part.region_of_triangle[i];
         if (part.runs.empty() || part.runs.back().region != region)
