@@ -402,6 +402,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // volumes are measured with; the full weights move into the result.
   Approximations milli, fine;
   std::vector<InfluenceSet> milli_beside(unorm16 ? measured.size() : 0);
+  std::vector<QuantizedInfluences> fine_local(unorm16 ? measured.size() : 0);  // skin-local, for WEIGHTS_n
   // Every part pruned, then rounded together (they share the moments of their joints' motion).
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
@@ -461,11 +462,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       return influences;
     };
     baked.quantized = skinLocal(std::move(quantized));
-    const int skin_size = static_cast<int>(baked.skin_joints.size());
-    baked.standard = standardSkinAttributes(unorm16 ? skinLocal(quantized_fine) : baked.quantized, skin_size,
-                                            WeightStorage::kUnsignedShort);
-    baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
-    baked.packed_attributes = packedGltfAttributes(baked.packed);
+    if (unorm16) fine_local[a] = skinLocal(quantized_fine);
     timing.pack += lap();
     result.vertex_count += baked.quantized.vertexCount();
     result.parts.push_back(std::move(baked));
@@ -502,6 +499,18 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);
   if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);
   timing.error = lap();
+
+  // The written attributes and packed buffers last: built before the figures, they were 7 MB of the
+  // bake's peak at 100k vertices, which the figures' skinning batches set.
+  for (size_t a = 0; a < result.parts.size(); ++a) {
+    BakedPart& baked = result.parts[a];
+    const int skin_size = static_cast<int>(baked.skin_joints.size());
+    baked.standard = standardSkinAttributes(unorm16 ? fine_local[a] : baked.quantized, skin_size, WeightStorage::kUnsignedShort);
+    if (unorm16) fine_local[a] = QuantizedInfluences{};
+    baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
+    baked.packed_attributes = packedGltfAttributes(baked.packed);
+  }
+  timing.pack += lap();
   return result;
 }
 
