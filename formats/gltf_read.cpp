@@ -422,6 +422,21 @@ void readVrmHumanoid(const tinygltf::Model& model, const std::vector<int>& joint
   }
 }
 
+// tinygltf grows its lists by push_back, to up to twice their size; the model lives through the
+// whole bake (the writer starts from it), so they are cut to size: heap peak 12.27 -> 11.79 MB on
+// Quaternius Cyberpunk (22 clips, 530 accessors).
+void shrinkModelLists(tinygltf::Model* model) {
+  model->accessors.shrink_to_fit();
+  model->bufferViews.shrink_to_fit();
+  model->nodes.shrink_to_fit();
+  model->meshes.shrink_to_fit();
+  for (tinygltf::Animation& animation : model->animations) {
+    animation.channels.shrink_to_fit();
+    animation.samplers.shrink_to_fit();
+  }
+  model->animations.shrink_to_fit();
+}
+
 }  // namespace
 
 LoadedCharacter loadCharacter(const std::string& path) {
@@ -449,6 +464,7 @@ LoadedCharacter loadCharacter(const std::string& path) {
   }
   requireHonouredExtensions(document->model.extensionsRequired, path);
   decompressGltf(&document->model, path);
+  shrinkModelLists(&document->model);
   const tinygltf::Model& model = document->model;
   if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
 
