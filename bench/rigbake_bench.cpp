@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "anatomy/body_regions.h"
 #include "anatomy/placement.h"
 #include "formats/gltf_bake.h"
 #include "formats/gltf_document.h"
@@ -51,6 +52,9 @@ int main(int argc, char** argv) {
     BakeOptions options;
     options.influences = influences;
     options.threads = threads;
+    // The body regions `bake` measures and fits by default (--regions body): without them the bench
+    // timed a lighter fit and lighter figures than the CLI runs.
+    options.regions = resolveBodyRegions(loaded.character, landmarks, readRegionPreset(presets + "/regions/body.json"));
     const double place = lap();
     if (fitted) {
       muscles = bakeCharacter(loaded.character, muscles, options).muscles;
