@@ -144,30 +144,30 @@ DeformationFigures deformationFigures(const Character& character, const BakeResu
                                       const Approximations& approximations,
                                       const std::vector<std::vector<ScreenedError>>& screened,
                                       const std::vector<std::vector<SkinFrame>>& clip_frames, int threads) {
-  // The frames whose largest move could be their clip's.
+  // The (frame, part) pairs whose largest move could be their clip's.
   std::vector<std::pair<size_t, size_t>> exact;  // (frame, part), frames counted over every clip
-  std::vector<DeformationError> part_frames;     // screened[f][p], replaced by the exact figure where measured
   const size_t part_count = approximations.size();
   size_t first = 0;
   for (size_t c = 0; c < result.clips.size(); ++c) {
     const size_t frames = clip_frames[c].size();
+    // The clip's largest screened move (over its frames, the largest of the parts'), and its frame's
+    // largest bound: the clip's exact largest move is at least their difference.
     double largest = -1.0, largest_bound = 0.0;
-    std::vector<double> frame_largest(frames, 0.0), frame_bound(frames, 0.0);
     for (size_t t = 0; t < frames; ++t) {
+      double frame_largest = 0.0, frame_bound = 0.0;
       for (size_t a = 0; a < part_count; ++a) {
         const ScreenedError& figure = screened[first + t][a];
-        frame_largest[t] = std::max(frame_largest[t], figure.error.max_displacement);
-        frame_bound[t] = std::max(frame_bound[t], figure.bound);
+        frame_largest = std::max(frame_largest, figure.error.max_displacement);
+        frame_bound = std::max(frame_bound, figure.bound);
       }
-      if (frame_largest[t] > largest) {
-        largest = frame_largest[t];
-        largest_bound = frame_bound[t];
+      if (frame_largest > largest) {
+        largest = frame_largest;
+        largest_bound = frame_bound;
       }
     }
-    // Only the parts whose own screened figure could reach it: on Quaternius Cyberpunk (10 parts) the
-    // others were most of this pass.
+    // Only the parts whose own screened figure could reach it are recomputed: on Quaternius Cyberpunk
+    // (10 parts) the others were most of this pass.
     for (size_t t = 0; t < frames; ++t) {
-      if (frame_largest[t] + frame_bound[t] < largest - largest_bound) continue;
       for (size_t a = 0; a < part_count; ++a) {
         const ScreenedError& figure = screened[first + t][a];
         if (figure.error.max_displacement + figure.bound >= largest - largest_bound) exact.emplace_back(first + t, a);

@@ -511,8 +511,10 @@ std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& featu
   };
   // Distance to the nearest pose taken; rest (all features zero) counts as taken, so the first pose is
   // the one farthest from it. Ties go to the earlier candidate.
-  std::vector<double> nearest(n);
-  for (size_t i = 0; i < n; ++i) nearest[i] = squaredDistance(features[i], std::vector<double>(features[i].size(), 0.0));
+  std::vector<double> nearest(n, 0.0);
+  for (size_t i = 0; i < n; ++i) {
+    for (double f : features[i]) nearest[i] += f * f;
+  }
   std::vector<char> taken(n, 0);
   for (size_t c = 0; c < count; ++c) {
     size_t next = n;
