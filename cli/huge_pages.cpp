@@ -30,7 +30,7 @@
 
 namespace rigbake::cli {
 
-void restartWithHugePages(char** argv) {
+void restartWithMallocTunables(char** argv) {
 #if defined(__SANITIZE_ADDRESS__)
   (void)argv;
 #else

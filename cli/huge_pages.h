@@ -1,4 +1,5 @@
-// Running rigbake with glibc's malloc on transparent huge pages (cli/huge_pages.cpp says why).
+// Running rigbake with glibc's malloc on transparent huge pages, one arena and large blocks mapped apart
+// (cli/huge_pages.cpp says why).
 #pragma once
 
 namespace rigbake::cli {
@@ -9,6 +10,6 @@ namespace rigbake::cli {
 // read when a process starts. Returns, changing nothing, when it is already set (so
 // GLIBC_TUNABLES=glibc.malloc.hugetlb=0 opts out), when RIGBAKE_SANITIZE builds bring their own
 // allocator, or when the exec fails.
-void restartWithHugePages(char** argv);
+void restartWithMallocTunables(char** argv);
 
 }  // namespace rigbake::cli

@@ -7,7 +7,7 @@
 #include "cli/huge_pages.h"
 
 int main(int argc, char** argv) {
-  rigbake::cli::restartWithHugePages(argv);
+  rigbake::cli::restartWithMallocTunables(argv);
   CLI::App app{
       "rigbake builds joint-based muscle rigs for skinned humanoid glTF/GLB/VRM characters and bakes them.\n"
       "Positions are in the scene's units (glTF: metres).\n\n"
