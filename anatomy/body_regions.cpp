@@ -1,7 +1,6 @@
 #include "anatomy/body_regions.h"
 
 #include <algorithm>
-#include <map>
 #include <set>
 
 #include "anatomy/point_formula.h"
@@ -85,47 +84,73 @@ std::vector<BodyRegion> resolveBodyRegions(const Character& character, const Lan
   std::vector<BodyRegion> regions(order.size());
   for (size_t r = 0; r < order.size(); ++r) regions[r].name = order[r];
 
+  // Per joint and rule, whether one of the joint's owning landmarks is among the rule's owners, and
+  // whether a central one is: decided once per joint, not once per triangle.
+  struct JointRule {
+    bool owned = false, central = false;
+  };
+  std::vector<JointRule> joint_rule(static_cast<size_t>(skeleton.size()) * rules.size());
+  for (int j = 0; j < skeleton.size(); ++j) {
+    for (size_t i = 0; i < rules.size(); ++i) {
+      JointRule& flags = joint_rule[static_cast<size_t>(j) * rules.size() + i];
+      for (const std::string& owner : owners[j]) {
+        if (rules[i].owners.count(owner) == 0) continue;
+        flags.owned = true;
+        flags.central = flags.central ||
+                        std::find(centralLandmarks().begin(), centralLandmarks().end(), owner) != centralLandmarks().end();
+      }
+    }
+  }
+  std::vector<size_t> region_of_rule(rules.size());
+  for (size_t i = 0; i < rules.size(); ++i)
+    region_of_rule[i] = static_cast<size_t>(std::find(order.begin(), order.end(), rules[i].region) - order.begin());
+
+  std::vector<std::pair<int, double>> weight_of_joint;
   for (const MeshPart& part : character.meshes) {
     if (!part.skinned || part.positions.empty()) continue;
     for (BodyRegion& region : regions) region.triangles.emplace_back();
     const int slots = part.influences_per_vertex;
     for (size_t t = 0; t < part.triangles.size(); ++t) {
       const auto& triangle = part.triangles[t];
-      std::map<int, double> weight_of_joint;
+      // Each joint's weight summed over the corners, in slot order.
+      weight_of_joint.clear();
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
       for (int v : triangle) {
         centroid += part.positions[v] / 3.0;
-        for (int k = 0; k < slots; ++k) weight_of_joint[part.joints[v * slots + k]] += part.weights[v * slots + k];
+        for (int k = 0; k < slots; ++k) {
+          const int joint = part.joints[v * slots + k];
+          auto it = std::find_if(weight_of_joint.begin(), weight_of_joint.end(), [joint](const auto& e) { return e.first == joint; });
+          if (it == weight_of_joint.end()) {
+            weight_of_joint.emplace_back(joint, 0.0);
+            it = weight_of_joint.end() - 1;
+          }
+          it->second += part.weights[v * slots + k];
+        }
       }
       int strongest = -1;
       double best = 0.0;
-      for (const auto& [joint, weight] : weight_of_joint) {  // ascending joints: the lowest wins a tie
-        if (weight > best) {
+      for (const auto& [joint, weight] : weight_of_joint) {  // the lowest joint wins a tie
+        if (weight > best || (weight == best && strongest >= 0 && joint < strongest)) {
           best = weight;
           strongest = joint;
         }
       }
       if (strongest < 0) continue;
       const double lateral = landmarks.body.lateralOffset(centroid);
-      for (const SidedRule& rule : rules) {
+      for (size_t i = 0; i < rules.size(); ++i) {
+        const SidedRule& rule = rules[i];
         if (!rule.usable) continue;
-        bool owned = false, central = false;
-        for (const std::string& owner : owners[strongest]) {
-          if (rule.owners.count(owner) == 0) continue;
-          owned = true;
-          central = central || std::find(centralLandmarks().begin(), centralLandmarks().end(), owner) != centralLandmarks().end();
-        }
-        if (!owned) continue;
+        const JointRule& flags = joint_rule[static_cast<size_t>(strongest) * rules.size() + i];
+        if (!flags.owned) continue;
         // A central landmark (the pelvis) can own both sides of a sided region: split at the midline.
-        if (central && rule.side == "l" && lateral < 0.0) continue;
-        if (central && rule.side == "r" && lateral > 0.0) continue;
+        if (flags.central && rule.side == "l" && lateral < 0.0) continue;
+        if (flags.central && rule.side == "r" && lateral > 0.0) continue;
         if (!rule.rule->near.empty() && (centroid - rule.near).norm() > rule.radius) continue;
         if (!rule.rule->facing.empty()) {
           const double ahead = (centroid - rule.facing_point).dot(landmarks.body.forward);
           if (rule.rule->facing == "forward" ? ahead < 0.0 : ahead > 0.0) continue;
         }
-        const size_t r = std::find(order.begin(), order.end(), rule.region) - order.begin();
-        regions[r].triangles.back().push_back(static_cast<int>(t));
+        regions[region_of_rule[i]].triangles.back().push_back(static_cast<int>(t));
         break;
       }
     }
