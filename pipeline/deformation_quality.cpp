@@ -310,7 +310,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       sets[kFirstErrorSet + a].plus = errors[a][p].reference;
       sets[kFirstErrorSet + a].minus = errors[a][p].approximation;
     }
-    part.batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, &pivots);
+    part.batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, &pivots, threads);
     const SkinningBatch& batch = part.batch;
     std::vector<std::uint32_t> lane_of_skinned(positions.size(), 0);
     part.welded_of_lane.reserve(kSkinLanes * batch.groups());  // lives through the pass: no slack
@@ -358,15 +358,24 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       const InfluenceSet& rig = part.weights->rig;
       const size_t slots = static_cast<size_t>(rig.slots_per_vertex);
       part.muscle_skin.resize(static_cast<size_t>(muscle_count));
+      // Each muscle's weight at a vertex, summed over its slots in slot order (the muscles a vertex has
+      // are few: its slots are read once, not once per muscle).
+      std::vector<std::pair<int, double>> vertex_muscles;
       for (int w = 0; w < surface.weldedCount(); ++w) {
         const size_t v = static_cast<size_t>(surface.vertex_of_weld[w]);
-        for (int m = 0; m < muscle_count; ++m) {
-          double weight = 0.0;
-          for (size_t k = 0; k < slots; ++k) {
-            if (rig.joints[v * slots + k] == joint_count + m) weight += rig.weights[v * slots + k];
+        vertex_muscles.clear();
+        for (size_t k = 0; k < slots; ++k) {
+          const int m = rig.joints[v * slots + k] - joint_count;
+          if (m < 0 || m >= muscle_count) continue;
+          auto it = std::find_if(vertex_muscles.begin(), vertex_muscles.end(), [m](const auto& e) { return e.first == m; });
+          if (it == vertex_muscles.end()) {
+            vertex_muscles.emplace_back(m, 0.0);
+            it = vertex_muscles.end() - 1;
           }
-          if (weight >= kMuscleSkinWeight) part.muscle_skin[static_cast<size_t>(m)].emplace_back(w, weight);
+          it->second += rig.weights[v * slots + k];
         }
+        for (const auto& [m, weight] : vertex_muscles)
+          if (weight >= kMuscleSkinWeight) part.muscle_skin[static_cast<size_t>(m)].emplace_back(w, weight);
       }
     }
     widest_surface = std::max(widest_surface, static_cast<size_t>(surface.weldedCount()));

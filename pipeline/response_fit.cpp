@@ -754,11 +754,11 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     welded_sets[kWeldedRigSet].plus = &parts[p].rig;
     moving_sets[0].plus = &parts[p].rig;
     part.welded_batch = buildSkinningBatch(part.mesh->positions, surface.vertex_of_weld, skin_centre, welded_sets,
-                                           std::vector<char>(surface.vertex_of_weld.size(), 0), 0, &no_pivots);
+                                           std::vector<char>(surface.vertex_of_weld.size(), 0), 0, &no_pivots, threads);
     part.welded_of_lane = indexOfLane(part.welded_batch, surface.vertex_of_weld, part_vertex_count);
     part.welded_bind = bindOfLane(part.welded_batch, part.mesh->positions);
     part.moving_batch = buildSkinningBatch(part.mesh->positions, part.moving_vertices, skin_centre, moving_sets,
-                                           std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots);
+                                           std::vector<char>(part.moving_vertices.size(), 0), 0, &no_pivots, threads);
     part.moving_of_lane = indexOfLane(part.moving_batch, part.moving_vertices, part_vertex_count);
     part.moving_bind = bindOfLane(part.moving_batch, part.mesh->positions);
     {

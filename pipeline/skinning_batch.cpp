@@ -11,6 +11,7 @@
 #include <string>
 
 #include "anatomy/error.h"
+#include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
 
 namespace rigbake {
@@ -38,21 +39,31 @@ void splat(float value, Float4* out) {
   for (float& lane : out->v) lane = value;
 }
 
+// What mergeSlots() reuses from vertex to vertex.
+struct MergeScratch {
+  std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>> sorted;
+  std::vector<int> slot_of_joint;  // joint -> its entry in `sorted`, -1 between vertices
+};
+
 // One vertex's joints over every set, ascending, with each set's weight summed in double (plus minus
 // minus); set 0's total and first joint go into `vertex`. Ascending joints make each set's sum
 // independent of the other sets: a joint only another set uses adds an exact zero to it.
-void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v,
-                std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>>* sorted, VertexSlots* vertex) {
-  sorted->clear();
+void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeScratch* scratch, VertexSlots* vertex) {
+  auto& sorted = scratch->sorted;
+  auto& slot_of_joint = scratch->slot_of_joint;
+  sorted.clear();
   vertex->set0_total = 0.0;
   vertex->pivot = -1;
   auto slotOf = [&](int joint) {
-    for (size_t k = 0; k < sorted->size(); ++k)
-      if ((*sorted)[k].first == joint) return k;
     if (joint < 0 || joint > std::numeric_limits<std::uint16_t>::max())
       fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " out of range");
-    sorted->push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
-    return sorted->size() - 1;
+    if (static_cast<size_t>(joint) >= slot_of_joint.size()) slot_of_joint.resize(static_cast<size_t>(joint) + 1, -1);
+    int& slot = slot_of_joint[static_cast<size_t>(joint)];
+    if (slot < 0) {
+      slot = static_cast<int>(sorted.size());
+      sorted.push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
+    }
+    return static_cast<size_t>(slot);
   };
   for (int set = 0; set < kSkinSets; ++set) {
     for (int sign = 0; sign < 2; ++sign) {
@@ -63,7 +74,7 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v,
         const double weight = influences->weights[v * count + k];
         if (weight == 0.0) continue;
         const int joint = influences->joints[v * count + k];
-        (*sorted)[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
+        sorted[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
         if (set == 0 && sign == 0) {
           vertex->set0_total += weight;
           if (vertex->pivot < 0) vertex->pivot = joint;
@@ -71,7 +82,8 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v,
       }
     }
   }
-  std::sort(sorted->begin(), sorted->end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& slot : sorted) slot_of_joint[slot.first] = -1;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
 }
 
 }  // namespace
@@ -79,31 +91,49 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v,
 SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positions, const std::vector<int>& vertices,
                                  const Eigen::Vector3d& centre, const std::array<SetWeights, kSkinSets>& sets,
                                  const std::vector<char>& dual_quaternions, int dual_quaternion_joints,
-                                 DualQuaternionPivots* pivots) {
+                                 DualQuaternionPivots* pivots, int threads) {
   // Each vertex's joints, ascending. Their weights in each set are summed in double, here and again
   // when the groups are laid out (the same sums in the same order, so the same bits): keeping every
   // vertex's double weights until then took 32 bytes per slot, the bake's peak at 100k vertices.
+  // Chunks of vertices in parallel, each listing its joints apart; the lists are joined in chunk order.
+  constexpr size_t kVerticesPerChunk = 4096;
   std::vector<VertexSlots> slots(vertices.size());
-  std::vector<std::uint16_t> joints;
-  std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>> sorted;
-  for (size_t i = 0; i < vertices.size(); ++i) {
-    VertexSlots& vertex = slots[i];
-    mergeSlots(sets, static_cast<size_t>(vertices[i]), &sorted, &vertex);
-    vertex.first = static_cast<std::uint32_t>(joints.size());
-    vertex.count = static_cast<std::uint32_t>(sorted.size());
-    for (const auto& slot : sorted) joints.push_back(slot.first);
-    if (dual_quaternions[i] && sets[0].plus != nullptr && vertex.pivot >= 0) {
-      // Set 0's joints are the lowest ones below dual_quaternion_joints (the others' skeleton joints
-      // blend in with weight 0).
-      size_t count = 0;
-      for (const auto& [joint, joint_weights] : sorted) {
-        if (joint_weights[0] != 0.0 && joint >= dual_quaternion_joints)
-          fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " has no dual quaternion");
-        if (joint < dual_quaternion_joints) ++count;
+  std::vector<std::vector<std::uint16_t>> chunk_joints(parallelChunkCount(vertices.size(), kVerticesPerChunk));
+  parallelFor(threads, vertices.size(), kVerticesPerChunk, [&](size_t chunk, size_t begin, size_t end) {
+    MergeScratch scratch;
+    std::vector<std::uint16_t>& joints = chunk_joints[chunk];
+    for (size_t i = begin; i < end; ++i) {
+      VertexSlots& vertex = slots[i];
+      mergeSlots(sets, static_cast<size_t>(vertices[i]), &scratch, &vertex);
+      vertex.first = static_cast<std::uint32_t>(joints.size());
+      vertex.count = static_cast<std::uint32_t>(scratch.sorted.size());
+      for (const auto& slot : scratch.sorted) joints.push_back(slot.first);
+      if (dual_quaternions[i] && sets[0].plus != nullptr && vertex.pivot >= 0) {
+        // Set 0's joints are the lowest ones below dual_quaternion_joints (the others' skeleton joints
+        // blend in with weight 0).
+        size_t count = 0;
+        for (const auto& [joint, joint_weights] : scratch.sorted) {
+          if (joint_weights[0] != 0.0 && joint >= dual_quaternion_joints)
+            fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " has no dual quaternion");
+          if (joint < dual_quaternion_joints) ++count;
+        }
+        vertex.dual_quaternion_slots = static_cast<std::uint8_t>(std::min<size_t>(count, 255));
+      } else {
+        vertex.pivot = -1;
       }
-      vertex.dual_quaternion_slots = static_cast<std::uint8_t>(std::min<size_t>(count, 255));
-    } else {
-      vertex.pivot = -1;
+    }
+  });
+  std::vector<std::uint16_t> joints;
+  {
+    size_t total = 0;
+    for (const std::vector<std::uint16_t>& list : chunk_joints) total += list.size();
+    joints.reserve(total);
+    for (size_t chunk = 0; chunk < chunk_joints.size(); ++chunk) {
+      const std::uint32_t offset = static_cast<std::uint32_t>(joints.size());
+      const size_t begin = chunk * kVerticesPerChunk, end = std::min(vertices.size(), begin + kVerticesPerChunk);
+      for (size_t i = begin; i < end; ++i) slots[i].first += offset;
+      joints.insert(joints.end(), chunk_joints[chunk].begin(), chunk_joints[chunk].end());
+      std::vector<std::uint16_t>().swap(chunk_joints[chunk]);
     }
   }
 
@@ -143,7 +173,6 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
   batch.positions.reserve(3 * groups);
   batch.first_slot.reserve(groups + 1);
   batch.joints.reserve(slot_total);
-  batch.weights.reserve(static_cast<size_t>(kSkinSets) * slot_total);
   batch.dual_quaternion_slots.reserve(groups);
   batch.pivot_row.reserve(groups);
   batch.inverse_total.reserve(groups);
@@ -170,21 +199,30 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
     batch.inverse_total.push_back(inverse_total);
     batch.dual_quaternion_slots.push_back(shared.dual_quaternion_slots);
     batch.pivot_row.push_back(shared.pivot >= 0 ? pivots->rowOf(shared.pivot) : 0);
-    // The group's weights, slot by slot and set by set, four lanes at a time.
-    const size_t first_weight = batch.weights.size();
-    batch.weights.resize(first_weight + static_cast<size_t>(kSkinSets) * shared.count);
     for (std::uint32_t k = 0; k < shared.count; ++k) batch.joints.push_back(joints[shared.first + k]);
-    for (size_t lane = 0; lane + begin < end; ++lane) {
-      VertexSlots merged;
-      mergeSlots(sets, static_cast<size_t>(vertices[order[begin + lane]]), &sorted, &merged);
-      for (std::uint32_t k = 0; k < shared.count; ++k)
-        for (int set = 0; set < kSkinSets; ++set)
-          batch.weights[first_weight + static_cast<size_t>(kSkinSets) * k + static_cast<size_t>(set)].v[lane] =
-              static_cast<float>(sorted[k].second[static_cast<size_t>(set)]);
-    }
     batch.first_slot.push_back(static_cast<std::uint32_t>(batch.joints.size()));
     begin = end;
   }
+  // The groups' weights, slot by slot and set by set, four lanes at a time: each group's own range,
+  // groups in parallel.
+  batch.weights.resize(static_cast<size_t>(kSkinSets) * slot_total);
+  constexpr size_t kGroupsPerChunk = 1024;
+  parallelFor(threads, groups, kGroupsPerChunk, [&](size_t, size_t first_group, size_t last_group) {
+    MergeScratch scratch;
+    VertexSlots merged;
+    for (size_t g = first_group; g < last_group; ++g) {
+      const size_t group_begin = g == 0 ? 0 : group_end[g - 1];
+      const size_t first_weight = static_cast<size_t>(kSkinSets) * batch.first_slot[g];
+      const std::uint32_t count = batch.first_slot[g + 1] - batch.first_slot[g];
+      for (size_t lane = 0; lane + group_begin < group_end[g]; ++lane) {
+        mergeSlots(sets, static_cast<size_t>(vertices[order[group_begin + lane]]), &scratch, &merged);
+        for (std::uint32_t k = 0; k < count; ++k)
+          for (int set = 0; set < kSkinSets; ++set)
+            batch.weights[first_weight + static_cast<size_t>(kSkinSets) * k + static_cast<size_t>(set)].v[lane] =
+                static_cast<float>(scratch.sorted[k].second[static_cast<size_t>(set)]);
+      }
+    }
+  });
   return batch;
 }
 

@@ -83,11 +83,11 @@ struct SkinningBatch {
 // dual_quaternion_joints (FloatSkinFrame splits those). Joints that repeat in a vertex's slots are
 // merged. A set's offset at a vertex is the same bits whatever the other sets are: its nonzero terms
 // come in ascending joint order, and the others' joints add exact zeros. Throws INTERNAL for a joint
-// beyond 65535 or without a dual quaternion.
+// beyond 65535 or without a dual quaternion. The same batch at any thread count.
 SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positions, const std::vector<int>& vertices,
                                  const Eigen::Vector3d& centre, const std::array<SetWeights, kSkinSets>& sets,
                                  const std::vector<char>& dual_quaternions, int dual_quaternion_joints,
-                                 DualQuaternionPivots* pivots);
+                                 DualQuaternionPivots* pivots, int threads);
 
 // One sampled frame in single precision, about `centre` c: each skin matrix as the map of p - c to
 // M p - c, every entry already in all four lanes. linear: 12 per joint, row r column k at 4 r + k, of
