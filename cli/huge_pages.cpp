@@ -12,11 +12,15 @@
 // was 114 MB with two arenas and 106 MB with one, in the same time (the bake does not allocate per
 // frame or per vertex, so the threads hardly meet in malloc).
 //
-// And blocks of 4 MiB or more mapped on their own (glibc.malloc.mmap_threshold=4194304) and so given
+// And blocks of 8 MiB or more mapped on their own (glibc.malloc.mmap_threshold=8388608) and so given
 // back when freed: by default glibc raises that threshold each time such a block is freed, and the
 // bake's next large vectors then came from the heap, which could not shrink past them. Measured on the
 // 100k-vertex bake, six runs each: peak 95-104 MB -> 92-95 MB, for about 6,000 more page faults
-// (0.05 s).
+// (0.05 s), with 4 MiB. 8 MiB keeps that peak (five runs: 96-105 MB, 98-105 MB at 4 MiB; Cyberpunk
+// 22-24 MB either way) and the blocks between 4 and 8 MiB (the file's bytes, a part's positions and
+// weight sets at 100k vertices) come from the heap again: a first bake and re-bake in one process
+// took 14,100 page faults and 1.40 s at 4 MiB, 2,000 and 1.27 s at 8 MiB (perf stat, six runs).
+// 16 MiB raised the peak by 5 MB.
 //
 // The tunables are read only when a process starts, hence the restart; it costs one exec (about a
 // millisecond). Profilers that follow one process (valgrind) should be given the tunable up front.
@@ -39,7 +43,7 @@ void restartWithMallocTunables(char** argv) {
   std::string value = "glibc.malloc.hugetlb=1";
   if (tunables == nullptr || std::strstr(tunables, "glibc.malloc.arena_max") == nullptr) value += ":glibc.malloc.arena_max=1";
   if (tunables == nullptr || std::strstr(tunables, "glibc.malloc.mmap_threshold") == nullptr)
-    value += ":glibc.malloc.mmap_threshold=4194304";
+    value += ":glibc.malloc.mmap_threshold=8388608";
   if (tunables != nullptr && *tunables != '\0') value = std::string(tunables) + ":" + value;
   if (setenv("GLIBC_TUNABLES", value.c_str(), 1) != 0) return;
   execv("/proc/self/exe", argv);

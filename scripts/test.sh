@@ -12,7 +12,7 @@ echo "== release build, all tests" >&2
 bash "$repo/scripts/build.sh" release >/dev/null
 # The test binary's own bakes get the allocator setting the CLI gives itself (cli/huge_pages.cpp), and
 # the CLI runs it starts need not restart for it.
-GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1:glibc.malloc.mmap_threshold=4194304" \
+GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1:glibc.malloc.mmap_threshold=8388608" \
   ctest --test-dir "$repo/build" --output-on-failure --parallel "$(nproc)" --timeout 600
 
 # Tests that only hand written files to outside programs (Blender, the Khronos validator, Chromium,
