@@ -279,9 +279,10 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
         fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
       MeasuredPart part;
       part.mesh_part = static_cast<int>(p);
-      part.input = normalizedInfluences(base);
+      part.input = normalizedInfluences(base, options.threads);
       part.rig = normalizedInfluences(addMuscleInfluences(part.input, surfaces[skinned_index], shares[skinned_index], rigged,
-                                                muscle_joints, options.weights));
+                                                muscle_joints, options.weights, options.threads),
+                                      options.threads);
       ++skinned_index;
       measured.push_back(std::move(part));
     }
@@ -406,7 +407,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // Every part pruned, then rounded together (they share the moments of their joints' motion).
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
-  for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences));
+  for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences, options.threads));
   for (size_t a = 0; a < measured.size(); ++a)
     motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[measured[a].mesh_part].positions});
   std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
@@ -427,17 +428,17 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     baked.full = std::move(measured[a].rig);
     QuantizedInfluences quantized = std::move(quantized_parts[a]);
     const QuantizedInfluences quantized_fine =
-        unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale) : QuantizedInfluences{};
+        unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale, options.threads) : QuantizedInfluences{};
     InfluenceSet().joints.swap(pruned_parts[a].joints);
     std::vector<double>().swap(pruned_parts[a].weights);
     timing.weights += lap();
     if (unorm16) {
-      milli_beside[a] = dequantizeInfluences(quantized);
-      measured[a].rig = dequantizeInfluences(quantized_fine);
+      milli_beside[a] = dequantizeInfluences(quantized, options.threads);
+      measured[a].rig = dequantizeInfluences(quantized_fine, options.threads);
       milli.emplace_back(static_cast<int>(p), &milli_beside[a]);
       fine.emplace_back(static_cast<int>(p), &measured[a].rig);
     } else {
-      measured[a].rig = dequantizeInfluences(quantized);
+      measured[a].rig = dequantizeInfluences(quantized, options.threads);
       milli.emplace_back(static_cast<int>(p), &measured[a].rig);
     }
 

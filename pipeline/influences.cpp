@@ -9,9 +9,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 
 #include "anatomy/error.h"
+#include "pipeline/parallel.h"
 
 namespace rigbake {
 
@@ -63,6 +65,14 @@ struct VertexScratch {
   std::vector<bool> eligible;
   std::vector<size_t> rank;
 };
+
+// body(begin, end) over [0, vertices) in chunks on up to `threads` threads: each vertex's outputs are
+// its own, so the result is the same at any count; an error is the lowest vertex's, as in one pass.
+void forVertexChunks(int threads, int vertices, const std::function<void(int begin, int end)>& body) {
+  constexpr size_t kVerticesPerChunk = 8192;
+  parallelFor(threads, static_cast<size_t>(std::max(vertices, 0)), kVerticesPerChunk,
+              [&](size_t, size_t begin, size_t end) { body(static_cast<int>(begin), static_cast<int>(end)); });
+}
 
 // The non-zero slots of one vertex, a joint named twice merged into one slot (both slots move the
 // vertex by the same matrix, so their sum is the joint's influence), in canonical order, into
@@ -149,13 +159,15 @@ void appendLe16(std::vector<std::uint8_t>& bytes, unsigned value) {
 
 }  // namespace
 
-InfluenceSet normalizedInfluences(const InfluenceSet& set) {
+InfluenceSet normalizedInfluences(const InfluenceSet& set, int threads) {
   InfluenceSet out = set;
-  for (int v = 0; v < set.vertexCount(); ++v) {
-    double sum = 0.0;
-    for (int k = 0; k < set.slots_per_vertex; ++k) sum += set.weights[v * set.slots_per_vertex + k];
-    for (int k = 0; k < set.slots_per_vertex; ++k) out.weights[v * set.slots_per_vertex + k] /= sum;
-  }
+  forVertexChunks(threads, set.vertexCount(), [&](int begin, int end) {
+    for (int v = begin; v < end; ++v) {
+      double sum = 0.0;
+      for (int k = 0; k < set.slots_per_vertex; ++k) sum += set.weights[v * set.slots_per_vertex + k];
+      for (int k = 0; k < set.slots_per_vertex; ++k) out.weights[v * set.slots_per_vertex + k] /= sum;
+    }
+  });
   return out;
 }
 
@@ -199,7 +211,7 @@ std::vector<InfluenceIssue> checkInfluences(const InfluenceSet& set, int joint_c
   return issues;
 }
 
-InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences) {
+InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences, int threads) {
   requireShape(set.slots_per_vertex, set.joints.size(), set.weights.size(), "pruneInfluences");
   if (max_influences < 1) fail("INTERNAL", "", "pruneInfluences needs at least one influence per vertex");
   InfluenceSet out;
@@ -207,23 +219,25 @@ InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences) {
   const int vertices = set.vertexCount();
   out.joints.assign(static_cast<size_t>(vertices) * max_influences, 0);
   out.weights.assign(static_cast<size_t>(vertices) * max_influences, 0.0);
-  VertexScratch scratch;
-  for (int v = 0; v < vertices; ++v) {
-    const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
-    if (slots.empty()) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to prune");
-    const size_t count = std::min(slots.size(), static_cast<size_t>(max_influences));
-    double kept = 0.0;
-    for (size_t k = 0; k < count; ++k) kept += slots[k].weight;
-    size_t base = static_cast<size_t>(v) * max_influences;
-    for (size_t k = 0; k < count; ++k) {
-      out.joints[base + k] = slots[k].joint;
-      out.weights[base + k] = slots[k].weight / kept;
+  forVertexChunks(threads, vertices, [&](int begin, int end) {
+    VertexScratch scratch;
+    for (int v = begin; v < end; ++v) {
+      const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
+      if (slots.empty()) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to prune");
+      const size_t count = std::min(slots.size(), static_cast<size_t>(max_influences));
+      double kept = 0.0;
+      for (size_t k = 0; k < count; ++k) kept += slots[k].weight;
+      size_t base = static_cast<size_t>(v) * max_influences;
+      for (size_t k = 0; k < count; ++k) {
+        out.joints[base + k] = slots[k].joint;
+        out.weights[base + k] = slots[k].weight / kept;
+      }
     }
-  }
+  });
   return out;
 }
 
-QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale) {
+QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale, int threads) {
   requireShape(set.slots_per_vertex, set.joints.size(), set.weights.size(), "quantizeInfluences");
   requireFullScale(full_scale);
   QuantizedInfluences out;
@@ -231,26 +245,28 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale) 
   out.full_scale = full_scale;
   out.joints.assign(set.joints.size(), 0);
   out.weights.assign(set.joints.size(), 0);
-  VertexScratch scratch;
-  for (int v = 0; v < set.vertexCount(); ++v) {
-    const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
-    double sum = 0.0;
-    for (const Slot& slot : slots) sum += slot.weight;
-    if (!(sum > 0.0)) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to quantize");
-    std::vector<IntegerSlot>& units = scratch.units;
-    std::vector<double>& remainders = scratch.remainders;
-    units.resize(slots.size());
-    remainders.resize(slots.size());
-    scratch.eligible.assign(slots.size(), true);
-    for (size_t k = 0; k < slots.size(); ++k) {
-      double share = slots[k].weight / sum * full_scale;
-      double whole = std::floor(share);
-      units[k] = {slots[k].joint, static_cast<std::int64_t>(whole)};
-      remainders[k] = share - whole;
+  forVertexChunks(threads, set.vertexCount(), [&](int begin, int end) {
+    VertexScratch scratch;
+    for (int v = begin; v < end; ++v) {
+      const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
+      double sum = 0.0;
+      for (const Slot& slot : slots) sum += slot.weight;
+      if (!(sum > 0.0)) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to quantize");
+      std::vector<IntegerSlot>& units = scratch.units;
+      std::vector<double>& remainders = scratch.remainders;
+      units.resize(slots.size());
+      remainders.resize(slots.size());
+      scratch.eligible.assign(slots.size(), true);
+      for (size_t k = 0; k < slots.size(); ++k) {
+        double share = slots[k].weight / sum * full_scale;
+        double whole = std::floor(share);
+        units[k] = {slots[k].joint, static_cast<std::int64_t>(whole)};
+        remainders[k] = share - whole;
+      }
+      distributeMissingUnits(units, remainders, scratch.eligible, full_scale, &scratch.rank);
+      writeCanonical(units, out.slots_per_vertex, static_cast<size_t>(v) * out.slots_per_vertex, &out);
     }
-    distributeMissingUnits(units, remainders, scratch.eligible, full_scale, &scratch.rank);
-    writeCanonical(units, out.slots_per_vertex, static_cast<size_t>(v) * out.slots_per_vertex, &out);
-  }
+  });
   return out;
 }
 
@@ -292,15 +308,18 @@ QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, i
   return out;
 }
 
-InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized) {
+InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int threads) {
   requireShape(quantized.slots_per_vertex, quantized.joints.size(), quantized.weights.size(),
                "dequantizeInfluences");
   InfluenceSet out;
   out.slots_per_vertex = quantized.slots_per_vertex;
   out.joints = quantized.joints;
   out.weights.resize(quantized.weights.size());
-  for (size_t i = 0; i < quantized.weights.size(); ++i)
-    out.weights[i] = static_cast<double>(quantized.weights[i]) / quantized.full_scale;
+  const size_t slots = static_cast<size_t>(quantized.slots_per_vertex);
+  forVertexChunks(threads, quantized.vertexCount(), [&](int begin, int end) {
+    for (size_t i = static_cast<size_t>(begin) * slots; i < static_cast<size_t>(end) * slots; ++i)
+      out.weights[i] = static_cast<double>(quantized.weights[i]) / quantized.full_scale;
+  });
   return out;
 }
 

@@ -96,7 +96,9 @@ bool parseGltfWeights(const std::string& name, GltfWeights* weights);
 InfluenceSet influencesFromMesh(const MeshPart& part);
 
 // Each vertex's weights divided by their sum (which must not be 0: run checkInfluences() first).
-InfluenceSet normalizedInfluences(const InfluenceSet& set);
+// The per-vertex functions below take the threads to run on (pipeline/parallel.h); their results do not
+// depend on it.
+InfluenceSet normalizedInfluences(const InfluenceSet& set, int threads = 1);
 
 // Every problem that would make pruning or quantizing meaningless: a joint outside [0, joint_count)
 // in a non-zero slot, a NaN/infinite or negative weight, a vertex whose weights sum to 0.
@@ -107,14 +109,14 @@ std::vector<InfluenceIssue> checkInfluences(const InfluenceSet& set, int joint_c
 // Keeps each vertex's `max_influences` largest weights (equal weights: lower joint index first, so the
 // result does not depend on slot order), after merging slots that repeat a joint, and rescales them to
 // sum to 1. The result has exactly max_influences slots per vertex, in canonical order.
-InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences);
+InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences, int threads = 1);
 
 // Integers in units of 1/full_scale summing exactly to full_scale, by largest-remainder rounding of
 // w / sum(w) * full_scale: each weight is rounded down, then the units still missing go one each to
 // the largest remainders (equal remainders: the slot that comes first in canonical order). Every result
 // is therefore within one unit of the exact share. A weight that rounds to 0 becomes a zero slot.
 // Same slot count as the input; weights need not sum to 1.
-QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale = kMilliScale);
+QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale = kMilliScale, int threads = 1);
 
 // The same largest-remainder rounding from one integer scale to another, done exactly in integers:
 // w_new = floor(w * new_scale / old_scale) plus one unit for the largest remainders
@@ -122,7 +124,7 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale =
 QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, int full_scale);
 
 // Weights as fractions w / full_scale, slots unchanged.
-InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized);
+InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int threads = 1);
 
 // glTF JOINTS_n and WEIGHTS_n for n = 0 .. ceil(slots / 4) - 1, in that order (JOINTS_0, WEIGHTS_0,
 // JOINTS_1, ...). Weights are `quantized` requantized to 255 or 65535, so each vertex's integers across

@@ -282,72 +282,86 @@ void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGr
 
 InfluenceSet addMuscleInfluences(const InfluenceSet& base, const SurfaceGraph& surface, const MuscleShares& shares,
                                  const MuscleSet& muscles, const std::vector<int>& muscle_joints,
-                                 const MuscleWeightOptions& options) {
+                                 const MuscleWeightOptions& options, int threads) {
   assert(muscle_joints.size() == muscles.parts.size());
   const int vertex_count = base.vertexCount();
   const int muscle_count = static_cast<int>(muscles.parts.size());
 
   // Each vertex's row of (joint, weight), one after another; per vertex only its muscles are touched
-  // (the sums skip the others' zero shares, which add nothing).
-  std::vector<std::pair<int, double>> rows;
-  std::vector<std::uint32_t> first_of_row(static_cast<size_t>(vertex_count) + 1, 0);
-  std::vector<double> share_here(static_cast<size_t>(muscle_count), 0.0), taken(static_cast<size_t>(muscle_count), 0.0);
-  std::vector<int> order;
-  int widest = 0;
-  for (int v = 0; v < vertex_count; ++v) {
-    const int weld = surface.weld_of_vertex[v];
-    const std::uint32_t shares_begin = shares.first[weld], shares_end = shares.first[weld + 1];
-    // The strongest muscles here, as many as the influence budget leaves room for (ties: file order).
-    int existing = 0;
-    for (int k = 0; k < base.slots_per_vertex; ++k) existing += base.weights[v * base.slots_per_vertex + k] > 0.0;
-    order.clear();
-    for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
-      if (shares.share[i] > 0.0) order.push_back(static_cast<int>(i));
-    }
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return shares.share[a] > shares.share[b]; });
-    const size_t room = static_cast<size_t>(std::max(0, options.max_influences - existing));
-    for (size_t i = 0; i < order.size() && i < room; ++i) share_here[shares.muscle[order[i]]] = shares.share[order[i]];
-    const size_t row_begin = rows.size();
-    for (int k = 0; k < base.slots_per_vertex; ++k) {
-      const int joint = base.joints[v * base.slots_per_vertex + k];
-      const double weight = base.weights[v * base.slots_per_vertex + k];
-      if (weight <= 0.0) continue;
-      // The muscles riding this joint share at most max_total_share of its weight here.
-      double total = 0.0;
+  // (the sums skip the others' zero shares, which add nothing). Chunks of vertices in parallel, each
+  // with its own rows: every vertex's row is the same at any thread count.
+  constexpr size_t kVerticesPerChunk = 8192;
+  struct ChunkRows {
+    std::vector<std::pair<int, double>> rows;
+    std::vector<std::uint32_t> first_of_row;  // per vertex of the chunk, and one past the last
+    int widest = 0;
+  };
+  std::vector<ChunkRows> chunks(parallelChunkCount(static_cast<size_t>(vertex_count), kVerticesPerChunk));
+  parallelFor(threads, static_cast<size_t>(vertex_count), kVerticesPerChunk, [&](size_t chunk, size_t begin, size_t end) {
+    ChunkRows& out = chunks[chunk];
+    std::vector<std::pair<int, double>>& rows = out.rows;
+    out.first_of_row.assign(end - begin + 1, 0);
+    std::vector<double> share_here(static_cast<size_t>(muscle_count), 0.0), taken(static_cast<size_t>(muscle_count), 0.0);
+    std::vector<int> order;
+    for (int v = static_cast<int>(begin); v < static_cast<int>(end); ++v) {
+      const int weld = surface.weld_of_vertex[v];
+      const std::uint32_t shares_begin = shares.first[weld], shares_end = shares.first[weld + 1];
+      // The strongest muscles here, as many as the influence budget leaves room for (ties: file order).
+      int existing = 0;
+      for (int k = 0; k < base.slots_per_vertex; ++k) existing += base.weights[v * base.slots_per_vertex + k] > 0.0;
+      order.clear();
+      for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+        if (shares.share[i] > 0.0) order.push_back(static_cast<int>(i));
+      }
+      std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return shares.share[a] > shares.share[b]; });
+      const size_t room = static_cast<size_t>(std::max(0, options.max_influences - existing));
+      for (size_t i = 0; i < order.size() && i < room; ++i) share_here[shares.muscle[order[i]]] = shares.share[order[i]];
+      const size_t row_begin = rows.size();
+      for (int k = 0; k < base.slots_per_vertex; ++k) {
+        const int joint = base.joints[v * base.slots_per_vertex + k];
+        const double weight = base.weights[v * base.slots_per_vertex + k];
+        if (weight <= 0.0) continue;
+        // The muscles riding this joint share at most max_total_share of its weight here.
+        double total = 0.0;
+        for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+          const int m = shares.muscle[i];
+          if (muscles.parts[m].carrier == joint) total += share_here[m];
+        }
+        const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
+        double given = 0.0;
+        for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
+          const int m = shares.muscle[i];
+          if (muscles.parts[m].carrier != joint || share_here[m] <= 0.0) continue;
+          const double amount = weight * share_here[m] * limit;
+          taken[m] += amount;
+          given += amount;
+        }
+        if (weight - given > 0.0) rows.emplace_back(joint, weight - given);
+      }
       for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
         const int m = shares.muscle[i];
-        if (muscles.parts[m].carrier == joint) total += share_here[m];
+        if (taken[m] > 0.0) rows.emplace_back(muscle_joints[m], taken[m]);
+        share_here[m] = taken[m] = 0.0;
       }
-      const double limit = total > options.max_total_share ? options.max_total_share / total : 1.0;
-      double given = 0.0;
-      for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
-        const int m = shares.muscle[i];
-        if (muscles.parts[m].carrier != joint || share_here[m] <= 0.0) continue;
-        const double amount = weight * share_here[m] * limit;
-        taken[m] += amount;
-        given += amount;
-      }
-      if (weight - given > 0.0) rows.emplace_back(joint, weight - given);
+      out.widest = std::max(out.widest, static_cast<int>(rows.size() - row_begin));
+      out.first_of_row[static_cast<size_t>(v) - begin + 1] = static_cast<std::uint32_t>(rows.size());
     }
-    for (std::uint32_t i = shares_begin; i < shares_end; ++i) {
-      const int m = shares.muscle[i];
-      if (taken[m] > 0.0) rows.emplace_back(muscle_joints[m], taken[m]);
-      share_here[m] = taken[m] = 0.0;
-    }
-    widest = std::max(widest, static_cast<int>(rows.size() - row_begin));
-    first_of_row[static_cast<size_t>(v) + 1] = static_cast<std::uint32_t>(rows.size());
-  }
+  });
   InfluenceSet result;
-  result.slots_per_vertex = std::max(widest, base.slots_per_vertex);
+  result.slots_per_vertex = base.slots_per_vertex;
+  for (const ChunkRows& chunk : chunks) result.slots_per_vertex = std::max(result.slots_per_vertex, chunk.widest);
   result.joints.assign(static_cast<size_t>(vertex_count) * result.slots_per_vertex, 0);
   result.weights.assign(result.joints.size(), 0.0);
-  for (int v = 0; v < vertex_count; ++v) {
-    for (std::uint32_t i = first_of_row[v]; i < first_of_row[v + 1]; ++i) {
-      const size_t k = i - first_of_row[v];
-      result.joints[v * result.slots_per_vertex + k] = rows[i].first;
-      result.weights[v * result.slots_per_vertex + k] = rows[i].second;
+  parallelFor(threads, static_cast<size_t>(vertex_count), kVerticesPerChunk, [&](size_t chunk, size_t begin, size_t end) {
+    const ChunkRows& rows = chunks[chunk];
+    for (size_t v = begin; v < end; ++v) {
+      for (std::uint32_t i = rows.first_of_row[v - begin]; i < rows.first_of_row[v - begin + 1]; ++i) {
+        const size_t k = i - rows.first_of_row[v - begin];
+        result.joints[v * result.slots_per_vertex + k] = rows.rows[i].first;
+        result.weights[v * result.slots_per_vertex + k] = rows.rows[i].second;
+      }
     }
-  }
+  });
   return result;
 }
 

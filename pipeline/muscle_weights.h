@@ -70,9 +70,10 @@ void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGr
 // `base` are the part's influences; muscle m becomes skeleton joint muscle_joints[m] and takes
 // share * limit of the weight the vertex has on muscle m's carrier joint (limit keeps the muscles on
 // one joint within max_total_share). Returns the influences with the muscles added (more slots per
-// vertex), each vertex still summing to its old sum. Every part must have its carrier chosen.
+// vertex), each vertex still summing to its old sum. Every part must have its carrier chosen. The same
+// result on any number of threads.
 InfluenceSet addMuscleInfluences(const InfluenceSet& base, const SurfaceGraph& surface, const MuscleShares& shares,
                                  const MuscleSet& muscles, const std::vector<int>& muscle_joints,
-                                 const MuscleWeightOptions& options = {});
+                                 const MuscleWeightOptions& options = {}, int threads = 1);
 
 }  // namespace rigbake

@@ -705,7 +705,7 @@ namespace {
 
 QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                  const std::vector<SkinFrame>& frames, const MomentTable& table, int threads) {
-  QuantizedInfluences out = quantizeInfluences(set, kMilliScale);
+  QuantizedInfluences out = quantizeInfluences(set, kMilliScale, threads);
   const int slots = set.slots_per_vertex;
   const size_t vertex_count = static_cast<size_t>(set.vertexCount());
 
