@@ -303,8 +303,14 @@ struct FitPart {
   std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
   std::vector<SplitPatch> patches;    // the whole surface, then each region
   std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
-  std::vector<std::vector<MuscleVertex>> muscle_vertices;  // per moving index
-  std::vector<int> first_share;  // moving index -> its first muscle slot in a flat list of all of them
+  // Every moving vertex's fitted-muscle slots, one vertex after another: moving index c has
+  // muscle_slots[first_share[c] .. first_share[c + 1]) (one flat list: a vector per vertex was a
+  // million allocations at 1M vertices).
+  std::vector<MuscleVertex> muscle_slots;
+  std::vector<int> first_share;  // moving index -> its first muscle slot; one past the last at the end
+  const MuscleVertex* slotsBegin(int c) const { return muscle_slots.data() + first_share[static_cast<size_t>(c)]; }
+  const MuscleVertex* slotsEnd(int c) const { return muscle_slots.data() + first_share[static_cast<size_t>(c) + 1]; }
+  bool hasSlots(int c) const { return first_share[static_cast<size_t>(c)] != first_share[static_cast<size_t>(c) + 1]; }
   // Skinned in single precision (pipeline/skinning_batch.h), as the figures skin them: the pose-only
   // pass every welded vertex with the input's and the rig's weights, each iteration the moving
   // vertices with the rig's. A vertex's offset is the same bits in either batch (a set's offset does
@@ -684,7 +690,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     VolumeSurface& surface = measured.surfaces[p];
     for (size_t r : kept) part.regions.push_back(std::move(measured.regions[p][r]));
     const InfluenceSet& rig = parts[p].rig;
-    std::vector<std::vector<MuscleVertex>> muscle_of_weld(surface.weldedCount());
+    // Each welded vertex's fitted-muscle slots, flat: welded w has weld_slots[weld_first[w] ..
+    // weld_first[w + 1]).
+    std::vector<MuscleVertex> weld_slots;
+    std::vector<int> weld_first(static_cast<size_t>(surface.weldedCount()) + 1, 0);
     std::vector<char> fitted(surface.weldedCount(), 0);
     for (int w = 0; w < surface.weldedCount(); ++w) {
       const int v = surface.vertex_of_weld[w];
@@ -692,9 +701,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const int m = rig.joints[v * rig.slots_per_vertex + k] - joint_count;
         const double weight = rig.weights[v * rig.slots_per_vertex + k];
         if (m < 0 || m >= muscle_count || kind[m] < 0 || weight <= 0.0) continue;
-        muscle_of_weld[w].push_back({m, weight, bind_inverse[m] * part.mesh->positions[v]});
+        weld_slots.push_back({m, weight, bind_inverse[m] * part.mesh->positions[v]});
       }
-      fitted[w] = !muscle_of_weld[w].empty();
+      weld_first[static_cast<size_t>(w) + 1] = static_cast<int>(weld_slots.size());
+      fitted[w] = weld_first[w + 1] != weld_first[w];
     }
     part.patches.push_back(splitPatch(surface.whole, fitted));
     for (const ClosedPatch& region : part.regions) part.patches.push_back(splitPatch(region, fitted));
@@ -709,23 +719,23 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       }
     }
     std::vector<int> moving_of_weld(surface.weldedCount(), -1);
+    part.first_share.push_back(0);
     for (int w = 0; w < surface.weldedCount(); ++w) {
       if (!moving[w]) continue;
       moving_of_weld[w] = static_cast<int>(part.moving_vertices.size());
       part.moving_vertices.push_back(surface.vertex_of_weld[w]);
-      part.muscle_vertices.push_back(std::move(muscle_of_weld[w]));
+      part.muscle_slots.insert(part.muscle_slots.end(), weld_slots.begin() + weld_first[w], weld_slots.begin() + weld_first[w + 1]);
+      part.first_share.push_back(static_cast<int>(part.muscle_slots.size()));
     }
+    std::vector<MuscleVertex>().swap(weld_slots);
     for (SplitPatch& split : part.patches) renumberMoving(moving_of_weld, &split);
     for (SplitPatch& split : part.patches) {
       for (int c : split.touched) {
-        if (!part.muscle_vertices[c].empty()) split.fitted.push_back(c);
+        if (part.hasSlots(c)) split.fitted.push_back(c);
       }
     }
     const WholeFans fans = wholeFans(part.patches[0], part.moving_vertices.size());
     findRim(fans, part.moving_vertices.size(), &part.patches[0]);
-    part.first_share.push_back(0);
-    for (const std::vector<MuscleVertex>& slots : part.muscle_vertices)
-      part.first_share.push_back(part.first_share.back() + static_cast<int>(slots.size()));
     // Each region's moving triangles as indices into the whole surface's moving piece: the region's
     // patch holds the surface triangles of its part triangles, in order (measuredSurfaces()).
     {
@@ -781,8 +791,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   };
   std::vector<std::vector<SkinVertex>> muscle_skin(muscle_count);
   for (size_t p = 0; p < fit_parts.size(); ++p) {
-    for (size_t c = 0; c < fit_parts[p].muscle_vertices.size(); ++c) {
-      for (const MuscleVertex& mv : fit_parts[p].muscle_vertices[c]) {
+    for (size_t c = 0; c < fit_parts[p].moving_vertices.size(); ++c) {
+      for (const MuscleVertex* mv_at = fit_parts[p].slotsBegin(static_cast<int>(c)); mv_at != fit_parts[p].slotsEnd(static_cast<int>(c)); ++mv_at) {
+        const MuscleVertex& mv = *mv_at;
         if (mv.weight >= kMuscleSkinWeight) muscle_skin[mv.muscle].push_back({static_cast<int>(p), static_cast<int>(c), mv.weight});
       }
     }
@@ -971,14 +982,14 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       // vertex only adds g . u, g . s and their scale combination to its muscle's three sums, and the
       // keys are expanded once per muscle when the row is taken.
       auto addVertex = [&](const FitPart& part, int w, const Eigen::Vector3d& g, double factor) {
-        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-          const MuscleKeyMotion& motion = key_motion[mv.muscle];
-          const double along_up = factor * mv.weight * g.dot(motion.up_axis);
-          const double along_side = factor * mv.weight * g.dot(motion.side_axis);
-          MuscleSums& sum = sums[mv.muscle];
+        for (const MuscleVertex* mv = part.slotsBegin(w); mv != part.slotsEnd(w); ++mv) {
+          const MuscleKeyMotion& motion = key_motion[mv->muscle];
+          const double along_up = factor * mv->weight * g.dot(motion.up_axis);
+          const double along_side = factor * mv->weight * g.dot(motion.side_axis);
+          MuscleSums& sum = sums[mv->muscle];
           sum.up += along_up;
           sum.side += along_side;
-          sum.scale += mv.q.y() * along_up + mv.q.z() * along_side;
+          sum.scale += mv->q.y() * along_up + mv->q.z() * along_side;
         }
       };
       // The body row's shares are kept per muscle slot: a region's inner vertices have the same
@@ -987,12 +998,12 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
         const FitPart& part = fit_parts[p];
         const Eigen::Vector3d& g = normals[p][w];
         MuscleSums* share = body_shares[p].data() + part.first_share[w];
-        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-          const MuscleKeyMotion& motion = key_motion[mv.muscle];
-          const double along_up = mv.weight * g.dot(motion.up_axis);
-          const double along_side = mv.weight * g.dot(motion.side_axis);
-          *share = {along_up, along_side, mv.q.y() * along_up + mv.q.z() * along_side};
-          MuscleSums& sum = sums[mv.muscle];
+        for (const MuscleVertex* mv = part.slotsBegin(w); mv != part.slotsEnd(w); ++mv) {
+          const MuscleKeyMotion& motion = key_motion[mv->muscle];
+          const double along_up = mv->weight * g.dot(motion.up_axis);
+          const double along_side = mv->weight * g.dot(motion.side_axis);
+          *share = {along_up, along_side, mv->q.y() * along_up + mv->q.z() * along_side};
+          MuscleSums& sum = sums[mv->muscle];
           sum.up += share->up;
           sum.side += share->side;
           sum.scale += share->scale;
@@ -1002,8 +1013,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       auto addInnerVertex = [&](size_t p, int w) {
         const FitPart& part = fit_parts[p];
         const MuscleSums* share = body_shares[p].data() + part.first_share[w];
-        for (const MuscleVertex& mv : part.muscle_vertices[w]) {
-          MuscleSums& sum = sums[mv.muscle];
+        for (const MuscleVertex* mv = part.slotsBegin(w); mv != part.slotsEnd(w); ++mv) {
+          MuscleSums& sum = sums[mv->muscle];
           sum.up += share->up;
           sum.side += share->side;
           sum.scale += share->scale;
