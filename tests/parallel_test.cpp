@@ -18,6 +18,7 @@
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
+#include "pipeline/skinning_batch.h"
 #include "anatomy_fixture.h"
 
 namespace rigbake {
@@ -138,6 +139,53 @@ TEST_CASE("quantizeForMotion: the moment-based pass gives exactly the frame-by-f
         CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames), reference));
         CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames, 2), reference));
         CHECK(sameQuantized(quantizeForMotion(pruned, mesh.positions, frames, 3), reference));
+      }
+    }
+  }
+}
+
+TEST_CASE("influences and skinning batches: the same at 1, 2 and 3 threads, across chunk boundaries") {
+  for (const std::string& path : test::sampleAndAssetPaths()) {
+    const Character character = loadCharacter(path).character;
+    for (const MeshPart& mesh : character.meshes) {
+      if (!mesh.skinned || mesh.positions.empty()) continue;
+      INFO(path << " mesh " << mesh.name << ", " << mesh.positions.size() << " vertices");
+      const InfluenceSet input = normalizedInfluences(influencesFromMesh(mesh));
+      const InfluenceSet pruned = pruneInfluences(input, 4);
+      const QuantizedInfluences milli = quantizeInfluences(pruned, kMilliScale);
+      const InfluenceSet dequantized = dequantizeInfluences(milli);
+      std::vector<int> vertices(mesh.positions.size());
+      std::iota(vertices.begin(), vertices.end(), 0);
+      std::array<SetWeights, kSkinSets> sets;
+      sets[0].plus = &input;
+      sets[1].plus = &dequantized;
+      sets[2].plus = &input;
+      sets[2].minus = &dequantized;
+      const std::vector<char> dual_quaternions(vertices.size(), 1);
+      DualQuaternionPivots one_pivots;
+      const SkinningBatch one = buildSkinningBatch(mesh.positions, vertices, Eigen::Vector3d::Zero(), sets, dual_quaternions,
+                                                   character.skeleton.size(), &one_pivots, 1);
+      for (int threads : {2, 3}) {
+        const InfluenceSet normalized = normalizedInfluences(influencesFromMesh(mesh), threads);
+        CHECK(normalized.weights == input.weights);
+        const InfluenceSet pruned_here = pruneInfluences(input, 4, threads);
+        CHECK(pruned_here.joints == pruned.joints);
+        CHECK(pruned_here.weights == pruned.weights);
+        CHECK(sameQuantized(quantizeInfluences(pruned, kMilliScale, threads), milli));
+        CHECK(dequantizeInfluences(milli, threads).weights == dequantized.weights);
+        DualQuaternionPivots pivots;
+        const SkinningBatch many = buildSkinningBatch(mesh.positions, vertices, Eigen::Vector3d::Zero(), sets, dual_quaternions,
+                                                      character.skeleton.size(), &pivots, threads);
+        CHECK(many.vertex == one.vertex);
+        CHECK(many.joints == one.joints);
+        CHECK(many.first_slot == one.first_slot);
+        CHECK(many.pivot_row == one.pivot_row);
+        CHECK(pivots.joints == one_pivots.joints);
+        REQUIRE(many.weights.size() == one.weights.size());
+        bool same_weights = true;
+        for (size_t i = 0; i < one.weights.size(); ++i)
+          for (int lane = 0; lane < 4; ++lane) same_weights = same_weights && many.weights[i].v[lane] == one.weights[i].v[lane];
+        CHECK(same_weights);
       }
     }
   }
