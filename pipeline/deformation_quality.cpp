@@ -226,7 +226,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
     for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
     std::vector<std::vector<std::vector<int>>> region_triangles;
     for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
-    MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, weld_tolerance);
+    MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, weld_tolerance, threads);
     for (size_t r = 0; r < regions.size(); ++r) {
       if (measured.region_measured[r]) {
         kept.push_back(r);

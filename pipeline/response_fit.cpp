@@ -661,7 +661,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
   std::vector<std::vector<std::vector<int>>> region_triangles;
   for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
-  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles->body_height, 1e-3));
+  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles->body_height, 1e-3),
+                                               threads);
   std::vector<size_t> kept;
   for (size_t r = 0; r < regions.size(); ++r) {
     if (measured.region_measured[r]) kept.push_back(r);

@@ -3,6 +3,7 @@
 // ICIP 2001), openings closed by centroid fans; its gradient is the same sum differentiated per vertex.
 #include "pipeline/skin_volume.h"
 
+#include "pipeline/parallel.h"
 #include "pipeline/weld.h"
 
 #include <algorithm>
@@ -224,7 +225,8 @@ double patchArea(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& w
 }
 
 MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<int>& mesh_parts,
-                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance) {
+                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance,
+                                  int threads) {
   MeasuredSurfaces out;
   const size_t region_count = region_triangles.size();
   out.region_volumes.assign(region_count, 0.0);
@@ -236,17 +238,24 @@ MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<
     for (size_t t = 0; t < surface.part_triangle.size(); ++t) welded_of_part[surface.part_triangle[t]] = static_cast<int>(t);
     const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
     out.body_volume += enclosedVolume(surface.whole, welded);
-    std::vector<ClosedPatch> patches;
-    for (size_t r = 0; r < region_count; ++r) {
+    // Each region closed on its own, the regions on the bake's threads; their volumes and areas are
+    // added up in region order.
+    std::vector<ClosedPatch> patches(region_count);
+    std::vector<double> part_volume(region_count, 0.0), part_area(region_count, 0.0);
+    parallelForEach(threads, region_count, [&](size_t r) {
       std::vector<int> triangles;
       if (p < region_triangles[r].size()) {
         for (int t : region_triangles[r][p]) {
           if (welded_of_part[t] >= 0) triangles.push_back(welded_of_part[t]);
         }
       }
-      patches.push_back(closePatch(surface, triangles));
-      out.region_volumes[r] += enclosedVolume(patches.back(), welded);
-      region_area[r] += patchArea(patches.back(), welded);
+      patches[r] = closePatch(surface, triangles);
+      part_volume[r] = enclosedVolume(patches[r], welded);
+      part_area[r] = patchArea(patches[r], welded);
+    });
+    for (size_t r = 0; r < region_count; ++r) {
+      out.region_volumes[r] += part_volume[r];
+      region_area[r] += part_area[r];
     }
     out.surfaces.push_back(std::move(surface));
     out.regions.push_back(std::move(patches));

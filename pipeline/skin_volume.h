@@ -83,8 +83,10 @@ struct MeasuredSurfaces {
   std::vector<double> region_volumes;            // bind, summed over parts
   std::vector<char> region_measured;             // passes kMinRegionCompactness
 };
+// The regions are closed on up to `threads` threads (pipeline/parallel.h); the result does not depend on it.
 MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<int>& mesh_parts,
-                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance);
+                                  const std::vector<std::vector<std::vector<int>>>& region_triangles, double weld_tolerance,
+                                  int threads = 1);
 
 // Area-weighted vertex normals of the welded triangles (unit; zero for a vertex on no triangle).
 std::vector<Eigen::Vector3d> vertexNormals(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded);
