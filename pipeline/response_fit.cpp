@@ -792,10 +792,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   };
   std::vector<std::vector<SkinVertex>> muscle_skin(muscle_count);
   for (size_t p = 0; p < fit_parts.size(); ++p) {
-    for (size_t c = 0; c < fit_parts[p].moving_vertices.size(); ++c) {
-      for (const MuscleVertex* mv_at = fit_parts[p].slotsBegin(static_cast<int>(c)); mv_at != fit_parts[p].slotsEnd(static_cast<int>(c)); ++mv_at) {
-        const MuscleVertex& mv = *mv_at;
-        if (mv.weight >= kMuscleSkinWeight) muscle_skin[mv.muscle].push_back({static_cast<int>(p), static_cast<int>(c), mv.weight});
+    const FitPart& part = fit_parts[p];
+    for (int c = 0; c < static_cast<int>(part.moving_vertices.size()); ++c) {
+      for (const MuscleVertex* mv = part.slotsBegin(c); mv != part.slotsEnd(c); ++mv) {
+        if (mv->weight >= kMuscleSkinWeight) muscle_skin[mv->muscle].push_back({static_cast<int>(p), c, mv->weight});
       }
     }
   }
