@@ -564,17 +564,31 @@ bool momentMask(const MotionShares& shares, const Eigen::Vector3d& position, con
   return true;
 }
 
-// worstFrameError() of the units `mask` gives, skinning the vertex frame by frame (the same arithmetic).
-double motionWorstFrame(const MotionShares& shares, unsigned mask, const Eigen::Vector3d& position,
-                        const std::vector<SkinFrame>& frames) {
+// worstFrameError() of the units a vertex's mask gives, skinning it frame by frame with the same
+// arithmetic, so the same bits: transformPoint() and the weighted sum written out in scalars, in the
+// order Eigen's `error += factor * transformPoint(m, p)` takes them (that expression kept a Vector3d
+// temporary per joint and frame: Quaternius Cyberpunk's rounding stage took 101 ms at one thread with
+// it, 65 ms without).
+struct SettleVertex {
+  int vertex = 0;
+  int n = 0;
+  std::array<int, kMomentJoints> joints{};
+  std::array<double, kMomentJoints> factor{};
+};
+
+double motionWorstFrame(const SettleVertex& entry, const Eigen::Vector3d& position, const std::vector<SkinFrame>& frames) {
+  const double x = position[0], y = position[1], z = position[2];
   double worst = 0.0;
-  double factor[kMomentJoints];
-  for (int i = 0; i < shares.n; ++i)
-    factor[i] = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
   for (const SkinFrame& frame : frames) {
-    Eigen::Vector3d error = Eigen::Vector3d::Zero();
-    for (int i = 0; i < shares.n; ++i) error += factor[i] * transformPoint(frame[shares.joints[i]], position);
-    worst = std::max(worst, error.norm() / kMilliScale);
+    double ex = 0.0, ey = 0.0, ez = 0.0;
+    for (int i = 0; i < entry.n; ++i) {
+      const double* a = frame[static_cast<size_t>(entry.joints[i])].data();  // column-major 4x4
+      const double f = entry.factor[i];
+      ex += f * (a[0] * x + a[4] * y + a[8] * z + a[12]);
+      ey += f * (a[1] * x + a[5] * y + a[9] * z + a[13]);
+      ez += f * (a[2] * x + a[6] * y + a[10] * z + a[14]);
+    }
+    worst = std::max(worst, Eigen::Vector3d(ex, ey, ez).norm() / kMilliScale);
   }
   return worst;
 }
@@ -769,13 +783,29 @@ QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eige
 
   // The part's worst: only vertices whose bound reaches the largest lower bound can hold it.
   const double worst_floor = *std::max_element(chunk_floor.begin(), chunk_floor.end());
+  // The vertices to settle, listed, then in a few chunks per thread: chunks of the part's vertices left
+  // a part of a few hundred vertices on one thread (each writes only its own vertices' worst, so the
+  // chunking does not change a bit).
   auto settle = [&](double threshold) {
-    parallelFor(threads, vertex_count, kVertexGrain, [&](size_t, size_t begin, size_t end) {
-      for (size_t v = begin; v < end; ++v) {
-        if (known[v] || bound[v] < threshold) continue;
-        worst[v] = motionWorstFrame(motionShares(set, static_cast<int>(v)), chosen[v], bind_positions[v], frames);
-        known[v] = 1;
-      }
+    std::vector<SettleVertex> pending;
+    for (size_t v = 0; v < vertex_count; ++v) {
+      if (known[v] || bound[v] < threshold) continue;
+      const MotionShares shares = motionShares(set, static_cast<int>(v));
+      SettleVertex entry;
+      entry.vertex = static_cast<int>(v);
+      entry.n = shares.n;
+      entry.joints = shares.joints;
+      for (int i = 0; i < shares.n; ++i)
+        entry.factor[i] = (shares.floor_units[i] + static_cast<int>((chosen[v] >> i) & 1u)) - shares.exact[i];
+      pending.push_back(entry);
+      known[v] = 1;
+    }
+    const size_t chunks = 4 * static_cast<size_t>(resolveThreadCount(threads));
+    const size_t grain = std::max<size_t>(16, (pending.size() + chunks - 1) / chunks);
+    parallelFor(threads, pending.size(), grain, [&](size_t, size_t begin, size_t end) {
+      for (size_t k = begin; k < end; ++k)
+        worst[static_cast<size_t>(pending[k].vertex)] =
+            motionWorstFrame(pending[k], bind_positions[static_cast<size_t>(pending[k].vertex)], frames);
     });
   };
   settle(worst_floor);
