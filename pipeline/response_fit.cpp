@@ -487,6 +487,22 @@ struct PoseOnlyScratch {
   std::vector<Eigen::Vector3d> input, welded;
 };
 
+// What one worker of the fit's pose loop reuses from chunk to chunk and from iteration to iteration:
+// per fit part, buffers the size of its moving vertices. Allocated per chunk they were mapped and
+// zeroed by the kernel again for every four poses (at a million vertices, tens of megabytes each).
+// `gradients` is all zero between uses: each use zeroes the entries it wrote.
+struct PoseScratch {
+  std::vector<std::vector<Eigen::Vector3d>> posed, moved, gradients, normals;
+  std::vector<std::vector<Float4>> planar;
+  std::vector<TriangleTerms> terms;
+  std::vector<std::vector<MuscleSums>> body_shares;  // per part, per muscle slot
+  std::vector<MuscleKeyMotion> key_motion;
+  std::vector<MuscleSums> sums;
+  std::vector<Eigen::Matrix4d> apart;  // a muscle's skinning matrix less its carrier's
+  std::vector<Eigen::Affine3d> frame;
+  FloatSkinFrame float_frame;
+};
+
 double signedChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
 
 }  // namespace
@@ -928,6 +944,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   LinearModel best_model;
   double damping = options.initial_damping;
   const double skin_band = options.skin_band_share * muscles->body_height;
+  // A few poses per chunk, which keeps its posed vertices and gradients from pose to pose.
+  constexpr size_t kPosesPerChunk = 4;
+  std::vector<PoseScratch> pose_scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (int iteration = 0; iteration <= options.iterations; ++iteration) {
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
@@ -940,20 +959,33 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       double violation = 0.0;  // the violated hinges' squares, candidates or not
     };
     std::vector<PoseRows> pose_rows(poses.size());
-    // A few poses per chunk, which keeps its posed vertices and gradients from pose to pose.
-    constexpr size_t kPosesPerChunk = 4;
-    parallelFor(threads, poses.size(), kPosesPerChunk, [&](size_t, size_t chunk_begin, size_t chunk_end) {
-    std::vector<std::vector<Eigen::Vector3d>> posed(fit_parts.size()), moved(fit_parts.size());
-    std::vector<std::vector<Eigen::Vector3d>> gradients(fit_parts.size()), normals(fit_parts.size());
-    std::vector<std::vector<Float4>> planar(fit_parts.size());
-    std::vector<TriangleTerms> terms(fit_parts.size());
-    std::vector<std::vector<MuscleSums>> body_shares(fit_parts.size());  // per part, per muscle slot
-    std::vector<MuscleKeyMotion> key_motion(muscle_count);
-    std::vector<MuscleSums> sums(muscle_count);
-    std::vector<Eigen::Matrix4d> apart(muscle_count);  // a muscle's skinning matrix less its carrier's
-    std::vector<Eigen::Affine3d> frame;
-    FloatSkinFrame float_frame;
-    for (size_t p = 0; p < fit_parts.size(); ++p) gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
+    parallelForWorkers(threads, poses.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
+    PoseScratch& scratch = pose_scratch[worker];
+    if (scratch.posed.empty()) {
+      const size_t part_count = fit_parts.size();
+      scratch.posed.resize(part_count);
+      scratch.moved.resize(part_count);
+      scratch.gradients.resize(part_count);
+      scratch.normals.resize(part_count);
+      scratch.planar.resize(part_count);
+      scratch.terms.resize(part_count);
+      scratch.body_shares.resize(part_count);
+      scratch.key_motion.resize(muscle_count);
+      scratch.apart.resize(muscle_count);
+      for (size_t p = 0; p < part_count; ++p)
+        scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
+    }
+    std::vector<std::vector<Eigen::Vector3d>>&posed = scratch.posed, &moved = scratch.moved;
+    std::vector<std::vector<Eigen::Vector3d>>&gradients = scratch.gradients, &normals = scratch.normals;
+    std::vector<std::vector<Float4>>& planar = scratch.planar;
+    std::vector<TriangleTerms>& terms = scratch.terms;
+    std::vector<std::vector<MuscleSums>>& body_shares = scratch.body_shares;
+    std::vector<MuscleKeyMotion>& key_motion = scratch.key_motion;
+    std::vector<MuscleSums>& sums = scratch.sums;
+    sums.assign(muscle_count, MuscleSums{});
+    std::vector<Eigen::Matrix4d>& apart = scratch.apart;
+    std::vector<Eigen::Affine3d>& frame = scratch.frame;
+    FloatSkinFrame& float_frame = scratch.float_frame;
     for (size_t i = chunk_begin; i < chunk_end; ++i) {
       const Pose& pose = poses[i];
       const RigEvaluation evaluation = evaluateRig(rig, pose, false);
