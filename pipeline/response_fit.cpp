@@ -975,8 +975,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       for (size_t p = 0; p < part_count; ++p)
         scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
     }
-    std::vector<std::vector<Eigen::Vector3d>>&posed = scratch.posed, &moved = scratch.moved;
-    std::vector<std::vector<Eigen::Vector3d>>&gradients = scratch.gradients, &normals = scratch.normals;
+    std::vector<std::vector<Eigen::Vector3d>>& posed = scratch.posed;
+    std::vector<std::vector<Eigen::Vector3d>>& moved = scratch.moved;
+    std::vector<std::vector<Eigen::Vector3d>>& gradients = scratch.gradients;
+    std::vector<std::vector<Eigen::Vector3d>>& normals = scratch.normals;
     std::vector<std::vector<Float4>>& planar = scratch.planar;
     std::vector<TriangleTerms>& terms = scratch.terms;
     std::vector<std::vector<MuscleSums>>& body_shares = scratch.body_shares;
