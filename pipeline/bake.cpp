@@ -252,7 +252,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   const double body_height = muscles.body_height;
 
   // Where each muscle takes weight, and from which joint: its carrier, chosen from those shares.
-  const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height);
+  const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height, options.threads);
   std::vector<SurfaceGraph> surfaces;
   std::vector<MuscleShares> shares;
   for (const MeshPart& mesh : character.meshes) {

@@ -117,13 +117,15 @@ double muscleWeightRadius(const MusclePart& part, double body_height) {
   return 0.02 * body_height + 0.15 * (part.insertion.world - part.origin.world).norm();
 }
 
-std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height) {
-  std::vector<double> radii;
-  for (const MusclePart& muscle : muscles.parts) {
+std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height,
+                                      int threads) {
+  std::vector<double> radii(muscles.parts.size());
+  parallelForEach(threads, muscles.parts.size(), [&](size_t m) {
+    const MusclePart& muscle = muscles.parts[m];
     const double base = muscleWeightRadius(muscle, body_height);
     if (muscle.weight_radius > 0) {
-      radii.push_back(base);
-      continue;
+      radii[m] = base;
+      return;
     }
     // Only skin the muscle could take weight from counts: vertices weighted to a joint it spans.
     std::vector<char> spans(character.skeleton.size(), 0);
@@ -139,8 +141,8 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
         if (reachable) nearest = std::min(nearest, distanceToSegment(part.positions[v], muscle.origin.world, muscle.insertion.world));
       }
     }
-    radii.push_back(std::isfinite(nearest) ? std::max(base, nearest + 0.5 * base) : base);
-  }
+    radii[m] = std::isfinite(nearest) ? std::max(base, nearest + 0.5 * base) : base;
+  });
   return radii;
 }
 

@@ -38,7 +38,9 @@ struct MuscleWeightOptions {
 // skin when the segment lies deeper than that (stocky or cartoon bodies): at least the segment's
 // distance to the nearest skinned vertex plus half the base radius.
 double muscleWeightRadius(const MusclePart& part, double body_height);
-std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height);
+// One muscle per task on `threads` (each radius is a minimum over the vertices: the same at any count).
+std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height,
+                                      int threads = 1);
 
 // The joints a muscle spans: the skeleton path from its origin joint to its insertion joint.
 std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part);
