@@ -506,7 +506,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (size_t a = 0; a < result.parts.size(); ++a) {
     BakedPart& baked = result.parts[a];
     const int skin_size = static_cast<int>(baked.skin_joints.size());
-    baked.standard = standardSkinAttributes(unorm16 ? fine_local[a] : baked.quantized, skin_size, WeightStorage::kUnsignedShort);
+    baked.standard = standardSkinAttributes(unorm16 ? fine_local[a] : baked.quantized, skin_size, WeightStorage::kUnsignedShort,
+                                            options.threads);
     if (unorm16) fine_local[a] = QuantizedInfluences{};
     baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
     baked.packed_attributes = packedGltfAttributes(baked.packed);

@@ -152,11 +152,6 @@ void requireFullScale(int full_scale) {
     fail("INTERNAL", "", "full scale " + std::to_string(full_scale) + " does not fit 16-bit weights");
 }
 
-void appendLe16(std::vector<std::uint8_t>& bytes, unsigned value) {
-  bytes.push_back(static_cast<std::uint8_t>(value & 0xffu));
-  bytes.push_back(static_cast<std::uint8_t>((value >> 8) & 0xffu));
-}
-
 }  // namespace
 
 InfluenceSet normalizedInfluences(const InfluenceSet& set, int threads) {
@@ -270,7 +265,7 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale, 
   return out;
 }
 
-QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, int full_scale) {
+QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, int full_scale, int threads) {
   requireShape(quantized.slots_per_vertex, quantized.joints.size(), quantized.weights.size(),
                "requantizeInfluences");
   requireFullScale(full_scale);
@@ -282,29 +277,31 @@ QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, i
   out.weights.assign(quantized.joints.size(), 0);
   const int slots = quantized.slots_per_vertex;
   const std::int64_t old_scale = quantized.full_scale;
-  VertexScratch scratch;
-  std::vector<IntegerSlot>& units = scratch.units;
-  std::vector<std::int64_t>& remainders = scratch.integer_remainders;
-  std::vector<bool>& eligible = scratch.eligible;
-  for (int v = 0; v < quantized.vertexCount(); ++v) {
-    size_t base = static_cast<size_t>(v) * slots;
-    units.resize(static_cast<size_t>(slots));
-    remainders.resize(static_cast<size_t>(slots));
-    eligible.resize(static_cast<size_t>(slots));
-    std::int64_t sum = 0;
-    for (int k = 0; k < slots; ++k) {
-      std::int64_t scaled = static_cast<std::int64_t>(quantized.weights[base + k]) * full_scale;
-      units[k] = {quantized.joints[base + k], scaled / old_scale};
-      remainders[k] = scaled % old_scale;
-      eligible[k] = quantized.weights[base + k] > 0;
-      sum += quantized.weights[base + k];
+  forVertexChunks(threads, quantized.vertexCount(), [&](int begin, int end) {
+    VertexScratch scratch;
+    std::vector<IntegerSlot>& units = scratch.units;
+    std::vector<std::int64_t>& remainders = scratch.integer_remainders;
+    std::vector<bool>& eligible = scratch.eligible;
+    for (int v = begin; v < end; ++v) {
+      size_t base = static_cast<size_t>(v) * slots;
+      units.resize(static_cast<size_t>(slots));
+      remainders.resize(static_cast<size_t>(slots));
+      eligible.resize(static_cast<size_t>(slots));
+      std::int64_t sum = 0;
+      for (int k = 0; k < slots; ++k) {
+        std::int64_t scaled = static_cast<std::int64_t>(quantized.weights[base + k]) * full_scale;
+        units[k] = {quantized.joints[base + k], scaled / old_scale};
+        remainders[k] = scaled % old_scale;
+        eligible[k] = quantized.weights[base + k] > 0;
+        sum += quantized.weights[base + k];
+      }
+      if (sum != old_scale)
+        fail("INTERNAL", "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not " +
+                                 std::to_string(old_scale));
+      distributeMissingUnits(units, remainders, eligible, full_scale, &scratch.rank);
+      writeCanonical(units, slots, base, &out);
     }
-    if (sum != old_scale)
-      fail("INTERNAL", "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not " +
-                               std::to_string(old_scale));
-    distributeMissingUnits(units, remainders, eligible, full_scale, &scratch.rank);
-    writeCanonical(units, slots, base, &out);
-  }
+  });
   return out;
 }
 
@@ -324,15 +321,22 @@ InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int thre
 }
 
 std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluences& quantized, int joint_count,
-                                                        WeightStorage storage) {
+                                                        WeightStorage storage, int threads) {
   if (joint_count < 1 || joint_count > 65536)
     fail("INTERNAL", "", "glTF joint indices are at most 16 bits; joint count " + std::to_string(joint_count));
   const bool byte_weights = storage == WeightStorage::kUnsignedByte;
-  QuantizedInfluences stored = requantizeInfluences(quantized, byte_weights ? kUnsignedByteScale : kUnsignedShortScale);
+  QuantizedInfluences stored =
+      requantizeInfluences(quantized, byte_weights ? kUnsignedByteScale : kUnsignedShortScale, threads);
   const bool byte_joints = joint_count <= 256;
   const int slots = stored.slots_per_vertex;
   const int sets = (slots + 3) / 4;
   const int vertices = stored.vertexCount();
+  const size_t joint_bytes = byte_joints ? 1 : 2, weight_bytes = byte_weights ? 1 : 2;
+  // Little-endian, as glTF's buffers are.
+  auto put = [](std::uint8_t* at, unsigned value, size_t bytes) {
+    at[0] = static_cast<std::uint8_t>(value & 0xffu);
+    if (bytes == 2) at[1] = static_cast<std::uint8_t>((value >> 8) & 0xffu);
+  };
   std::vector<VertexAttributeData> attributes;
   for (int set = 0; set < sets; ++set) {
     VertexAttributeData joints;
@@ -341,29 +345,25 @@ std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluence
     VertexAttributeData weights;
     weights.semantic = "WEIGHTS_" + std::to_string(set);
     weights.accessor = {byte_weights ? kGltfUnsignedByte : kGltfUnsignedShort, "VEC4", vertices, true};
-    joints.bytes.reserve(static_cast<size_t>(vertices) * (byte_joints ? 4 : 8));
-    weights.bytes.reserve(static_cast<size_t>(vertices) * (byte_weights ? 4 : 8));
-    for (int v = 0; v < vertices; ++v) {
-      for (int c = 0; c < 4; ++c) {
-        int k = set * 4 + c;
-        size_t index = static_cast<size_t>(v) * slots + k;
-        unsigned joint = k < slots ? static_cast<unsigned>(stored.joints[index]) : 0u;
-        unsigned weight = k < slots ? stored.weights[index] : 0u;
-        if (joint >= static_cast<unsigned>(joint_count))
-          fail("INTERNAL", "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) +
-                                   " of " + std::to_string(joint_count));
-        if (byte_joints) {
-          joints.bytes.push_back(static_cast<std::uint8_t>(joint));
-        } else {
-          appendLe16(joints.bytes, joint);
-        }
-        if (byte_weights) {
-          weights.bytes.push_back(static_cast<std::uint8_t>(weight));
-        } else {
-          appendLe16(weights.bytes, weight);
+    joints.bytes.resize(static_cast<size_t>(vertices) * 4 * joint_bytes);
+    weights.bytes.resize(static_cast<size_t>(vertices) * 4 * weight_bytes);
+    // Each vertex writes its own eight fields: chunks of vertices on the bake's threads.
+    forVertexChunks(threads, vertices, [&](int begin, int end) {
+      for (int v = begin; v < end; ++v) {
+        for (int c = 0; c < 4; ++c) {
+          int k = set * 4 + c;
+          size_t index = static_cast<size_t>(v) * slots + k;
+          unsigned joint = k < slots ? static_cast<unsigned>(stored.joints[index]) : 0u;
+          unsigned weight = k < slots ? stored.weights[index] : 0u;
+          if (joint >= static_cast<unsigned>(joint_count))
+            fail("INTERNAL", "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) +
+                                     " of " + std::to_string(joint_count));
+          const size_t field = 4 * static_cast<size_t>(v) + static_cast<size_t>(c);
+          put(joints.bytes.data() + field * joint_bytes, joint, joint_bytes);
+          put(weights.bytes.data() + field * weight_bytes, weight, weight_bytes);
         }
       }
-    }
+    });
     attributes.push_back(std::move(joints));
     attributes.push_back(std::move(weights));
   }

@@ -121,7 +121,7 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale =
 // The same largest-remainder rounding from one integer scale to another, done exactly in integers:
 // w_new = floor(w * new_scale / old_scale) plus one unit for the largest remainders
 // (w * new_scale) mod old_scale. Used to map the 0.001 weights onto 255 or 65535.
-QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, int full_scale);
+QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, int full_scale, int threads = 1);
 
 // Weights as fractions w / full_scale, slots unchanged.
 InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int threads = 1);
@@ -133,6 +133,6 @@ InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int thre
 // exceed 65536). Joint indices are copied as given: the writer's skin.joints must list joints in
 // that index order.
 std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluences& quantized, int joint_count,
-                                                        WeightStorage storage);
+                                                        WeightStorage storage, int threads = 1);
 
 }  // namespace rigbake
