@@ -340,10 +340,13 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       for (size_t v = 0; v < positions.size(); ++v) part.lane_of_vertex[v] = lane_of_skinned[static_cast<size_t>(skinned_as[v])];
     }
     if (quality) {
+      // Stable by region (-1, none, first): a counting sort, the order std::stable_sort gives (it took
+      // 9 ms of the 100k sample's set-up on one core).
+      std::vector<size_t> first_of_region(kept.size() + 2, 0);
+      for (int region : part.region_of_triangle) ++first_of_region[static_cast<size_t>(region + 2)];
+      for (size_t k = 1; k < first_of_region.size(); ++k) first_of_region[k] += first_of_region[k - 1];
       std::vector<size_t> order(surface.whole.triangles.size());
-      std::iota(order.begin(), order.end(), 0);
-      std::stable_sort(order.begin(), order.end(),
-                       [&](size_t a, size_t b) { return part.region_of_triangle[a] < part.region_of_triangle[b]; });
+      for (size_t i = 0; i < order.size(); ++i) order[first_of_region[static_cast<size_t>(part.region_of_triangle[i] + 1)]++] = i;
       part.ordered_triangles.reserve(order.size());
       for (size_t i : order) {
         const int region = part.region_of_triangle[i];
