@@ -16,7 +16,6 @@
 #include <cmath>
 #include <limits>
 #include <map>
-#include <numeric>
 
 #include "pipeline/parallel.h"
 #include "pipeline/skinning.h"

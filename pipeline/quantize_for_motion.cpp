@@ -243,6 +243,12 @@ struct MotionShares {
   bool choice() const { return n > 1 && missing > 0 && missing < n; }
 };
 
+// e_i of the rounding `mask` gives slot i (bit i: rounded up), in thousandths: its units less the
+// exact share.
+double roundingError(const MotionShares& shares, unsigned mask, int i) {
+  return (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+}
+
 MotionShares motionShares(const InfluenceSet& set, int v) {
   MotionShares shares;
   const int slots = set.slots_per_vertex;
@@ -668,7 +674,7 @@ double keptWorstFrame(const MotionShares& shares, unsigned mask, const FrameByFr
   double worst = 0.0;
   double factor[kMomentJoints];
   for (int i = 0; i < shares.n; ++i)
-    factor[i] = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+    factor[i] = roundingError(shares, mask, i);
   const size_t n = static_cast<size_t>(shares.n);
   for (size_t at = 0; at < scratch.moved.size(); at += n) {
     Eigen::Vector3d error = Eigen::Vector3d::Zero();
@@ -765,7 +771,7 @@ QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eige
       // |r(t)| <= |sum_i e_i d_i(t)| + |sum_i e_i| |M_0(t) v|: the second term is rounding only.
       double sum_error = 0.0, largest = 0.0;
       for (int i = 0; i < shares.n; ++i) {
-        const double e = (shares.floor_units[i] + static_cast<int>((mask >> i) & 1u)) - shares.exact[i];
+        const double e = roundingError(shares, mask, i);
         sum_error += e;
         largest = std::max(largest, std::abs(e));
       }
@@ -796,7 +802,7 @@ QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eige
       entry.n = shares.n;
       entry.joints = shares.joints;
       for (int i = 0; i < shares.n; ++i)
-        entry.factor[i] = (shares.floor_units[i] + static_cast<int>((chosen[v] >> i) & 1u)) - shares.exact[i];
+        entry.factor[i] = roundingError(shares, chosen[v], i);
       pending.push_back(entry);
       known[v] = 1;
     }

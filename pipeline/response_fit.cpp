@@ -947,6 +947,19 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // A few poses per chunk, which keeps its posed vertices and gradients from pose to pose.
   constexpr size_t kPosesPerChunk = 4;
   std::vector<PoseScratch> pose_scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
+  for (PoseScratch& scratch : pose_scratch) {
+    const size_t part_count = fit_parts.size();
+    scratch.posed.resize(part_count);
+    scratch.moved.resize(part_count);
+    scratch.gradients.resize(part_count);
+    scratch.normals.resize(part_count);
+    scratch.planar.resize(part_count);
+    scratch.terms.resize(part_count);
+    scratch.body_shares.resize(part_count);
+    scratch.key_motion.resize(muscle_count);
+    scratch.apart.resize(muscle_count);
+    for (size_t p = 0; p < part_count; ++p) scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
+  }
   for (int iteration = 0; iteration <= options.iterations; ++iteration) {
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
@@ -961,20 +974,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     std::vector<PoseRows> pose_rows(poses.size());
     parallelForWorkers(threads, poses.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
     PoseScratch& scratch = pose_scratch[worker];
-    if (scratch.posed.empty()) {
-      const size_t part_count = fit_parts.size();
-      scratch.posed.resize(part_count);
-      scratch.moved.resize(part_count);
-      scratch.gradients.resize(part_count);
-      scratch.normals.resize(part_count);
-      scratch.planar.resize(part_count);
-      scratch.terms.resize(part_count);
-      scratch.body_shares.resize(part_count);
-      scratch.key_motion.resize(muscle_count);
-      scratch.apart.resize(muscle_count);
-      for (size_t p = 0; p < part_count; ++p)
-        scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
-    }
     std::vector<std::vector<Eigen::Vector3d>>& posed = scratch.posed;
     std::vector<std::vector<Eigen::Vector3d>>& moved = scratch.moved;
     std::vector<std::vector<Eigen::Vector3d>>& gradients = scratch.gradients;
