@@ -41,17 +41,20 @@ void splat(float value, Float4* out) {
 
 // What mergeSlots() reuses from vertex to vertex.
 struct MergeScratch {
-  std::vector<std::pair<std::uint16_t, std::array<double, kSkinSets>>> sorted;
-  std::vector<int> slot_of_joint;  // joint -> its entry in `sorted`, -1 between vertices
+  using Slot = std::pair<std::uint16_t, std::array<double, kSkinSets>>;
+  std::vector<Slot> sorted;
+  std::vector<Slot> merged;        // in the order the joints come
+  std::vector<std::uint64_t> keys;  // joint << 32 | entry in `merged`
+  std::vector<int> slot_of_joint;  // joint -> its entry in `merged`, -1 between vertices
 };
 
 // One vertex's joints over every set, ascending, with each set's weight summed in double (plus minus
 // minus); set 0's total and first joint go into `vertex`. Ascending joints make each set's sum
 // independent of the other sets: a joint only another set uses adds an exact zero to it.
 void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeScratch* scratch, VertexSlots* vertex) {
-  auto& sorted = scratch->sorted;
+  auto& merged = scratch->merged;
   auto& slot_of_joint = scratch->slot_of_joint;
-  sorted.clear();
+  merged.clear();
   vertex->set0_total = 0.0;
   vertex->pivot = -1;
   auto slotOf = [&](int joint) {
@@ -60,8 +63,8 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeSc
     if (static_cast<size_t>(joint) >= slot_of_joint.size()) slot_of_joint.resize(static_cast<size_t>(joint) + 1, -1);
     int& slot = slot_of_joint[static_cast<size_t>(joint)];
     if (slot < 0) {
-      slot = static_cast<int>(sorted.size());
-      sorted.push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
+      slot = static_cast<int>(merged.size());
+      merged.push_back({static_cast<std::uint16_t>(joint), {0.0, 0.0, 0.0, 0.0}});
     }
     return static_cast<size_t>(slot);
   };
@@ -74,7 +77,7 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeSc
         const double weight = influences->weights[v * count + k];
         if (weight == 0.0) continue;
         const int joint = influences->joints[v * count + k];
-        sorted[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
+        merged[slotOf(joint)].second[set] += sign == 0 ? weight : -weight;
         if (set == 0 && sign == 0) {
           vertex->set0_total += weight;
           if (vertex->pivot < 0) vertex->pivot = joint;
@@ -82,8 +85,16 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeSc
       }
     }
   }
-  for (const auto& slot : sorted) slot_of_joint[slot.first] = -1;
-  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (const auto& slot : merged) slot_of_joint[slot.first] = -1;
+  // Ordered by joint (each joint once) through 8-byte keys: sorting the 40-byte slots themselves moved
+  // each of them several times.
+  auto& keys = scratch->keys;
+  keys.resize(merged.size());
+  for (size_t i = 0; i < merged.size(); ++i) keys[i] = static_cast<std::uint64_t>(merged[i].first) << 32 | i;
+  std::sort(keys.begin(), keys.end());
+  auto& sorted = scratch->sorted;
+  sorted.resize(merged.size());
+  for (size_t i = 0; i < keys.size(); ++i) sorted[i] = merged[keys[i] & 0xffffffffu];
 }
 
 }  // namespace
