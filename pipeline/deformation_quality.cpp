@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 
@@ -62,10 +63,9 @@ struct PlanarPosition {
   __m128 x, y, z;
 };
 
-inline PlanarPosition loadPlanar(const Float4* planar, int w) {
-  const Float4* p = planar + 3 * static_cast<size_t>(w);
-  return {_mm_load_ps(p[0].v), _mm_load_ps(p[1].v), _mm_load_ps(p[2].v)};
-}
+inline PlanarPosition loadPlanarAt(const Float4* p) { return {_mm_load_ps(p[0].v), _mm_load_ps(p[1].v), _mm_load_ps(p[2].v)}; }
+
+inline PlanarPosition loadPlanar(const Float4* planar, int w) { return loadPlanarAt(planar + 3 * static_cast<size_t>(w)); }
 
 inline PlanarPosition minus(const PlanarPosition& a, const PlanarPosition& b) {
   return {_mm_sub_ps(a.x, b.x), _mm_sub_ps(a.y, b.y), _mm_sub_ps(a.z, b.z)};
@@ -142,8 +142,10 @@ struct PreparedPart {
   VolumeSurface surface;
   std::vector<MeasuredRegion> regions;  // one per measured region
   std::vector<int> region_of_triangle;  // per whole-surface triangle: the with_whole region holding it, or -1
-  // The whole surface's triangles ordered by region, in runs of one region (or none).
-  std::vector<std::array<int, 3>> ordered_triangles;
+  // The whole surface's triangles ordered by region, in runs of one region (or none); each corner as
+  // its first Float4 in the pass's planar positions (3 w for welded vertex w), which spares the loop
+  // over every triangle and frame a multiplication and a sign extension per corner.
+  std::vector<std::array<std::uint32_t, 3>> ordered_corners;
   struct Run {
     size_t begin = 0, end = 0;
     int region = -1;
@@ -346,13 +348,15 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       for (size_t k = 1; k < first_of_region.size(); ++k) first_of_region[k] += first_of_region[k - 1];
       std::vector<size_t> order(surface.whole.triangles.size());
       for (size_t i = 0; i < order.size(); ++i) order[first_of_region[static_cast<size_t>(part.region_of_triangle[i] + 1)]++] = i;
-      part.ordered_triangles.reserve(order.size());
+      part.ordered_corners.reserve(order.size());
       for (size_t i : order) {
         const int region = part.region_of_triangle[i];
         if (part.runs.empty() || part.runs.back().region != region)
-          part.runs.push_back({part.ordered_triangles.size(), part.ordered_triangles.size(), region});
-        part.ordered_triangles.push_back(surface.whole.triangles[i]);
-        part.runs.back().end = part.ordered_triangles.size();
+          part.runs.push_back({part.ordered_corners.size(), part.ordered_corners.size(), region});
+        const std::array<int, 3>& t = surface.whole.triangles[i];
+        part.ordered_corners.push_back({3u * static_cast<std::uint32_t>(t[0]), 3u * static_cast<std::uint32_t>(t[1]),
+                                        3u * static_cast<std::uint32_t>(t[2])});
+        part.runs.back().end = part.ordered_corners.size();
       }
     }
     if (quality) {
@@ -541,9 +545,9 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
           const size_t block_end = std::min(run.end, block + LaneSum::kBlock);
           __m128 body_terms = _mm_setzero_ps(), region_terms = _mm_setzero_ps();
           for (size_t i = block; i < block_end; ++i) {
-            const std::array<int, 3>& t = part.ordered_triangles[i];
-            const PlanarPosition a = loadPlanar(planar, t[0]);
-            const PlanarPosition area = areaVector(a, loadPlanar(planar, t[1]), loadPlanar(planar, t[2]));
+            const std::array<std::uint32_t, 3>& t = part.ordered_corners[i];
+            const PlanarPosition a = loadPlanarAt(planar + t[0]);
+            const PlanarPosition area = areaVector(a, loadPlanarAt(planar + t[1]), loadPlanarAt(planar + t[2]));
             body_terms = _mm_add_ps(body_terms, dot(minus(a, whole_origin), area));
             if (region_sum != nullptr) region_terms = _mm_add_ps(region_terms, dot(minus(a, region_origin), area));
           }
