@@ -51,18 +51,36 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
   ClosedPatch patch;
   patch.triangles.reserve(triangles.size());
   for (int index : triangles) patch.triangles.push_back(surface.whole.triangles[index]);
+  // The patch's own vertices, numbered in ascending welded order: the work below is then the size of
+  // the patch, not of the whole surface (once per region), and every order by vertex is unchanged.
+  std::vector<int> welded_of;  // local -> welded, ascending
+  std::vector<std::array<int, 3>> local_triangles(patch.triangles.size());
+  {
+    const size_t welded_count = static_cast<size_t>(surface.weldedCount());
+    std::vector<char> used(welded_count, 0);
+    for (const auto& w : patch.triangles)
+      for (int k = 0; k < 3; ++k) used[static_cast<size_t>(w[k])] = 1;
+    std::vector<int> local_of(welded_count, -1);
+    for (size_t w = 0; w < welded_count; ++w) {
+      if (!used[w]) continue;
+      local_of[w] = static_cast<int>(welded_of.size());
+      welded_of.push_back(static_cast<int>(w));
+    }
+    for (size_t t = 0; t < patch.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k) local_triangles[t][k] = local_of[static_cast<size_t>(patch.triangles[t][k])];
+  }
   // Directed edges a->b grouped by a, each group sorted (the order of the pairs (a, b), with a count
   // of each vertex's edges instead of a sort of all of them): a boundary edge is used once and its
   // reverse never.
-  const size_t vertex_count = static_cast<size_t>(surface.weldedCount());
+  const size_t vertex_count = welded_of.size();
   std::vector<std::uint32_t> first(vertex_count + 1, 0);
-  for (const auto& w : patch.triangles)
+  for (const auto& w : local_triangles)
     for (int k = 0; k < 3; ++k) ++first[static_cast<size_t>(w[k]) + 1];
   for (size_t v = 0; v < vertex_count; ++v) first[v + 1] += first[v];
   std::vector<int> targets(first.back());
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (const auto& w : patch.triangles)
+    for (const auto& w : local_triangles)
       for (int k = 0; k < 3; ++k) targets[fill[w[k]]++] = w[(k + 1) % 3];
   }
   for (size_t v = 0; v < vertex_count; ++v) std::sort(targets.begin() + first[v], targets.begin() + first[v + 1]);
@@ -91,11 +109,11 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
   for (size_t start_step = 0; start_step < steps.size(); ++start_step) {
     if (used[start_step]) continue;
     const int start = steps[start_step].first;
-    std::vector<int> loop = {start};
+    std::vector<int> loop = {welded_of[static_cast<size_t>(start)]};
     int to = steps[start_step].second;
     used[start_step] = 1;
     while (to != start) {
-      loop.push_back(to);
+      loop.push_back(welded_of[static_cast<size_t>(to)]);
       size_t step = firstStepFrom(to);
       if (step == steps.size() || steps[step].first != to) break;  // an open chain (non-manifold): cap what there is
       while (step < steps.size() && steps[step].first == to && used[step]) ++step;
