@@ -1,0 +1,144 @@
+// Closed patches and their volumes (pipeline/skin_volume.h) on the sample and every shared character:
+// a patch cut out of a surface is closed by exactly its boundary, and the volume sums give the bits of
+// the plain one-triangle-at-a-time sum, which the fit and the figures rely on to agree.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <map>
+#include <numeric>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "formats/gltf_document.h"
+#include "pipeline/skin_volume.h"
+#include "anatomy_fixture.h"
+
+namespace rigbake {
+namespace {
+
+// The reference: every triangle, then every cap triangle, one after the other, in double.
+double volumeOneByOne(const ClosedPatch& patch, const std::vector<Eigen::Vector3d>& welded, const Eigen::Vector3d& origin) {
+  double volume = 0.0;
+  for (const auto& t : patch.triangles) {
+    const Eigen::Vector3d a = welded[t[0]] - origin, b = welded[t[1]] - origin, c = welded[t[2]] - origin;
+    volume += a.dot(b.cross(c));
+  }
+  for (const std::vector<int>& hole : patch.holes) {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int w : hole) centre += welded[w];
+    centre = centre / static_cast<double>(hole.size()) - origin;
+    for (size_t k = 0; k < hole.size(); ++k) {
+      const Eigen::Vector3d a = welded[hole[k]] - origin, b = welded[hole[(k + 1) % hole.size()]] - origin;
+      volume += a.dot(b.cross(centre));
+    }
+  }
+  return volume / 6.0;
+}
+
+// Some cuts of a surface's triangles: all, the first half and a third (odd and even counts), the
+// triangles on one side of a plane through the middle (a cut across the body with long boundaries).
+std::vector<std::vector<int>> cuts(const VolumeSurface& surface, const std::vector<Eigen::Vector3d>& welded) {
+  const size_t count = surface.whole.triangles.size();
+  std::vector<int> all(count), half, third, above;
+  std::iota(all.begin(), all.end(), 0);
+  for (size_t t = 0; t < count; ++t) {
+    if (t < count / 2 + 1) half.push_back(static_cast<int>(t));
+    if (t % 3 == 0) third.push_back(static_cast<int>(t));
+  }
+  double low = 1e30, high = -1e30;
+  for (const Eigen::Vector3d& p : welded) {
+    low = std::min(low, p.y());
+    high = std::max(high, p.y());
+  }
+  for (size_t t = 0; t < count; ++t) {
+    const auto& w = surface.whole.triangles[t];
+    if (welded[w[0]].y() + welded[w[1]].y() + welded[w[2]].y() > 1.5 * (low + high)) above.push_back(static_cast<int>(t));
+  }
+  return {all, half, third, above};
+}
+
+TEST_CASE("skin volume: a patch's volume is the one-triangle-at-a-time sum to the bit, about any point") {
+  for (const std::string& path : test::sampleAndAssetPaths()) {
+    const Character character = loadCharacter(path).character;
+    for (const MeshPart& mesh : character.meshes) {
+      if (!mesh.skinned || mesh.positions.empty()) continue;
+      INFO(path << " mesh " << mesh.name);
+      const VolumeSurface surface = buildVolumeSurface(mesh, 1e-6);
+      const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
+      // Moved and scaled copies stand in for two other posings.
+      std::vector<Eigen::Vector3d> moved = welded, scaled = welded;
+      for (Eigen::Vector3d& p : moved) p += Eigen::Vector3d(0.3, -1.7, 2.1);
+      for (Eigen::Vector3d& p : scaled) p *= 1.25;
+      for (const std::vector<int>& cut : cuts(surface, welded)) {
+        const ClosedPatch patch = closePatch(surface, cut);
+        INFO(patch.triangles.size() << " triangles, " << patch.holes.size() << " holes");
+        if (patch.triangles.empty()) continue;
+        const Eigen::Vector3d first = welded[patch.triangles[0][0]];
+        CHECK(enclosedVolume(patch, welded) == volumeOneByOne(patch, welded, first));
+        for (const Eigen::Vector3d& origin : {Eigen::Vector3d::Zero().eval(), Eigen::Vector3d(10.0, -3.0, 7.5)})
+          CHECK(enclosedVolumeAbout(patch, welded, origin) == volumeOneByOne(patch, welded, origin));
+        const std::array<double, 3> three = enclosedVolumes(patch, {&welded, &moved, &scaled});
+        CHECK(three[0] == enclosedVolume(patch, welded));
+        CHECK(three[1] == enclosedVolume(patch, moved));
+        CHECK(three[2] == enclosedVolume(patch, scaled));
+      }
+    }
+  }
+}
+
+TEST_CASE("skin volume: a cut patch's holes are its boundary edges reversed, each once, in closed loops") {
+  for (const std::string& path : test::sampleAndAssetPaths()) {
+    const Character character = loadCharacter(path).character;
+    for (const MeshPart& mesh : character.meshes) {
+      if (!mesh.skinned || mesh.positions.empty()) continue;
+      INFO(path << " mesh " << mesh.name);
+      const VolumeSurface surface = buildVolumeSurface(mesh, 1e-6);
+      const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
+      for (const std::vector<int>& cut : cuts(surface, welded)) {
+        const ClosedPatch patch = closePatch(surface, cut);
+        INFO(patch.triangles.size() << " triangles, " << patch.holes.size() << " holes");
+        REQUIRE(patch.triangles.size() == cut.size());
+        for (size_t i = 0; i < cut.size(); ++i) CHECK(patch.triangles[i] == surface.whole.triangles[static_cast<size_t>(cut[i])]);
+        // Boundary edges: a -> b used once and b -> a never.
+        std::map<std::pair<int, int>, int> directed;
+        for (const auto& t : patch.triangles)
+          for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+        std::set<std::pair<int, int>> boundary;
+        for (const auto& [edge, uses] : directed)
+          if (uses == 1 && directed.count({edge.second, edge.first}) == 0) boundary.insert(edge);
+        // Each step of a hole b -> a runs against a boundary edge a -> b, and no boundary edge twice.
+        // The step from a loop's last vertex back to its first is apart: where the boundary does not
+        // close (a non-manifold opening of a shared character) the walk stops and that step is the
+        // cap's, not an edge.
+        std::set<std::pair<int, int>> covered;
+        std::vector<std::pair<int, int>> closing;
+        bool every_step_on_boundary = true, none_twice = true;
+        for (const std::vector<int>& hole : patch.holes) {
+          CHECK(hole.size() >= 3);
+          for (size_t k = 0; k + 1 < hole.size(); ++k) {
+            const std::pair<int, int> edge{hole[k + 1], hole[k]};
+            every_step_on_boundary = every_step_on_boundary && boundary.count(edge) == 1;
+            none_twice = none_twice && covered.insert(edge).second;
+          }
+          closing.emplace_back(hole.front(), hole.back());
+        }
+        CHECK(every_step_on_boundary);
+        CHECK(none_twice);
+        // A cut of the sample's closed, manifold parts is closed by every boundary edge, once.
+        if (path == test::sampleGlbPath()) {
+          for (const auto& edge : closing) {
+            CHECK(boundary.count(edge) == 1);
+            CHECK(covered.insert(edge).second);
+          }
+          CHECK(covered.size() == boundary.size());
+          if (cut.size() < surface.whole.triangles.size()) CHECK(!patch.holes.empty());
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace rigbake
