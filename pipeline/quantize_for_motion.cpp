@@ -582,19 +582,28 @@ struct SettleVertex {
   std::array<double, kMomentJoints> factor{};
 };
 
+// e(t) = sum_i factor_i M_i(t) p at every frame, each component as
+// ex += f * (((a0 x + a4 y) + a8 z) + a12): x and y in the two lanes of an SSE2 register (the matrix's
+// column-major rows 0 and 1 are adjacent), z on its own, the same operations in the same order.
 double motionWorstFrame(const SettleVertex& entry, const Eigen::Vector3d& position, const std::vector<SkinFrame>& frames) {
-  const double x = position[0], y = position[1], z = position[2];
+  const double z = position[2];
+  const __m128d px = _mm_set1_pd(position[0]), py = _mm_set1_pd(position[1]), pz = _mm_set1_pd(z);
   double worst = 0.0;
   for (const SkinFrame& frame : frames) {
-    double ex = 0.0, ey = 0.0, ez = 0.0;
+    __m128d exy = _mm_setzero_pd();
+    double ez = 0.0;
     for (int i = 0; i < entry.n; ++i) {
       const double* a = frame[static_cast<size_t>(entry.joints[i])].data();  // column-major 4x4
       const double f = entry.factor[i];
-      ex += f * (a[0] * x + a[4] * y + a[8] * z + a[12]);
-      ey += f * (a[1] * x + a[5] * y + a[9] * z + a[13]);
-      ez += f * (a[2] * x + a[6] * y + a[10] * z + a[14]);
+      const __m128d moved_xy = _mm_add_pd(
+          _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a), px), _mm_mul_pd(_mm_loadu_pd(a + 4), py)), _mm_mul_pd(_mm_loadu_pd(a + 8), pz)),
+          _mm_loadu_pd(a + 12));
+      exy = _mm_add_pd(exy, _mm_mul_pd(_mm_set1_pd(f), moved_xy));
+      ez += f * (a[2] * position[0] + a[6] * position[1] + a[10] * z + a[14]);
     }
-    worst = std::max(worst, Eigen::Vector3d(ex, ey, ez).norm() / kMilliScale);
+    double e[2];
+    _mm_storeu_pd(e, exy);
+    worst = std::max(worst, Eigen::Vector3d(e[0], e[1], ez).norm() / kMilliScale);
   }
   return worst;
 }
