@@ -586,8 +586,8 @@ struct SettleVertex {
 // ex += f * (((a0 x + a4 y) + a8 z) + a12): x and y in the two lanes of an SSE2 register (the matrix's
 // column-major rows 0 and 1 are adjacent), z on its own, the same operations in the same order.
 double motionWorstFrame(const SettleVertex& entry, const Eigen::Vector3d& position, const std::vector<SkinFrame>& frames) {
-  const double z = position[2];
-  const __m128d px = _mm_set1_pd(position[0]), py = _mm_set1_pd(position[1]), pz = _mm_set1_pd(z);
+  const double x = position[0], y = position[1], z = position[2];
+  const __m128d px = _mm_set1_pd(x), py = _mm_set1_pd(y), pz = _mm_set1_pd(z);
   double worst = 0.0;
   for (const SkinFrame& frame : frames) {
     __m128d exy = _mm_setzero_pd();
@@ -599,7 +599,7 @@ double motionWorstFrame(const SettleVertex& entry, const Eigen::Vector3d& positi
           _mm_add_pd(_mm_add_pd(_mm_mul_pd(_mm_loadu_pd(a), px), _mm_mul_pd(_mm_loadu_pd(a + 4), py)), _mm_mul_pd(_mm_loadu_pd(a + 8), pz)),
           _mm_loadu_pd(a + 12));
       exy = _mm_add_pd(exy, _mm_mul_pd(_mm_set1_pd(f), moved_xy));
-      ez += f * (a[2] * position[0] + a[6] * position[1] + a[10] * z + a[14]);
+      ez += f * (a[2] * x + a[6] * y + a[10] * z + a[14]);
     }
     double e[2];
     _mm_storeu_pd(e, exy);

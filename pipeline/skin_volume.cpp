@@ -57,12 +57,12 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
   std::vector<std::array<int, 3>> local_triangles(patch.triangles.size());
   {
     const size_t welded_count = static_cast<size_t>(surface.weldedCount());
-    std::vector<char> used(welded_count, 0);
+    std::vector<char> in_patch(welded_count, 0);
     for (const auto& w : patch.triangles)
-      for (int k = 0; k < 3; ++k) used[static_cast<size_t>(w[k])] = 1;
+      for (int k = 0; k < 3; ++k) in_patch[static_cast<size_t>(w[k])] = 1;
     std::vector<int> local_of(welded_count, -1);
     for (size_t w = 0; w < welded_count; ++w) {
-      if (!used[w]) continue;
+      if (!in_patch[w]) continue;
       local_of[w] = static_cast<int>(welded_of.size());
       welded_of.push_back(static_cast<int>(w));
     }
@@ -157,6 +157,7 @@ double enclosedVolumeAbout(const ClosedPatch& patch, const std::vector<Eigen::Ve
   // operations in its order (b x c component by component, then (a.x cx + a.y cy) + a.z cz, as Eigen's
   // dot of two 3-vectors), and the two terms join the sum one after the other, so the sum is the same
   // bits as one triangle at a time.
+  static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double), "welded positions are read as packed x, y, z");
   const size_t count = patch.triangles.size();
   size_t i = 0;
   if (count >= 2) {
