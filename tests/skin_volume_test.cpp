@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <set>
@@ -59,7 +60,10 @@ std::vector<std::vector<int>> cuts(const VolumeSurface& surface, const std::vect
   return {all, half, third, above};
 }
 
-TEST_CASE("skin volume: a patch's volume is the one-triangle-at-a-time sum to the bit, about any point") {
+// Every cut of every skinned part of the sample and the shared characters, closed: `visit` gets the
+// file, the welded surface and positions, the cut and its patch.
+void forEachCut(const std::function<void(const std::string& path, const VolumeSurface& surface, const std::vector<Eigen::Vector3d>& welded,
+                                         const std::vector<int>& cut, const ClosedPatch& patch)>& visit) {
   for (const std::string& path : test::sampleAndAssetPaths()) {
     const Character character = loadCharacter(path).character;
     for (const MeshPart& mesh : character.meshes) {
@@ -67,77 +71,74 @@ TEST_CASE("skin volume: a patch's volume is the one-triangle-at-a-time sum to th
       INFO(path << " mesh " << mesh.name);
       const VolumeSurface surface = buildVolumeSurface(mesh, 1e-6);
       const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
-      // Moved and scaled copies stand in for two other posings.
-      std::vector<Eigen::Vector3d> moved = welded, scaled = welded;
-      for (Eigen::Vector3d& p : moved) p += Eigen::Vector3d(0.3, -1.7, 2.1);
-      for (Eigen::Vector3d& p : scaled) p *= 1.25;
       for (const std::vector<int>& cut : cuts(surface, welded)) {
         const ClosedPatch patch = closePatch(surface, cut);
         INFO(patch.triangles.size() << " triangles, " << patch.holes.size() << " holes");
-        if (patch.triangles.empty()) continue;
-        const Eigen::Vector3d first = welded[patch.triangles[0][0]];
-        CHECK(enclosedVolume(patch, welded) == volumeOneByOne(patch, welded, first));
-        for (const Eigen::Vector3d& origin : {Eigen::Vector3d::Zero().eval(), Eigen::Vector3d(10.0, -3.0, 7.5)})
-          CHECK(enclosedVolumeAbout(patch, welded, origin) == volumeOneByOne(patch, welded, origin));
-        const std::array<double, 3> three = enclosedVolumes(patch, {&welded, &moved, &scaled});
-        CHECK(three[0] == enclosedVolume(patch, welded));
-        CHECK(three[1] == enclosedVolume(patch, moved));
-        CHECK(three[2] == enclosedVolume(patch, scaled));
+        visit(path, surface, welded, cut, patch);
       }
     }
   }
 }
 
+TEST_CASE("skin volume: a patch's volume is the one-triangle-at-a-time sum to the bit, about any point") {
+  forEachCut([](const std::string&, const VolumeSurface&, const std::vector<Eigen::Vector3d>& welded, const std::vector<int>&,
+                const ClosedPatch& patch) {
+    if (patch.triangles.empty()) return;
+    // Moved and scaled copies stand in for two other posings.
+    std::vector<Eigen::Vector3d> moved = welded, scaled = welded;
+    for (Eigen::Vector3d& p : moved) p += Eigen::Vector3d(0.3, -1.7, 2.1);
+    for (Eigen::Vector3d& p : scaled) p *= 1.25;
+    const Eigen::Vector3d first = welded[patch.triangles[0][0]];
+    CHECK(enclosedVolume(patch, welded) == volumeOneByOne(patch, welded, first));
+    for (const Eigen::Vector3d& origin : {Eigen::Vector3d::Zero().eval(), Eigen::Vector3d(10.0, -3.0, 7.5)})
+      CHECK(enclosedVolumeAbout(patch, welded, origin) == volumeOneByOne(patch, welded, origin));
+    const std::array<double, 3> three = enclosedVolumes(patch, {&welded, &moved, &scaled});
+    CHECK(three[0] == enclosedVolume(patch, welded));
+    CHECK(three[1] == enclosedVolume(patch, moved));
+    CHECK(three[2] == enclosedVolume(patch, scaled));
+  });
+}
+
 TEST_CASE("skin volume: a cut patch's holes are its boundary edges reversed, each once, in closed loops") {
-  for (const std::string& path : test::sampleAndAssetPaths()) {
-    const Character character = loadCharacter(path).character;
-    for (const MeshPart& mesh : character.meshes) {
-      if (!mesh.skinned || mesh.positions.empty()) continue;
-      INFO(path << " mesh " << mesh.name);
-      const VolumeSurface surface = buildVolumeSurface(mesh, 1e-6);
-      const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
-      for (const std::vector<int>& cut : cuts(surface, welded)) {
-        const ClosedPatch patch = closePatch(surface, cut);
-        INFO(patch.triangles.size() << " triangles, " << patch.holes.size() << " holes");
-        REQUIRE(patch.triangles.size() == cut.size());
-        for (size_t i = 0; i < cut.size(); ++i) CHECK(patch.triangles[i] == surface.whole.triangles[static_cast<size_t>(cut[i])]);
-        // Boundary edges: a -> b used once and b -> a never.
-        std::map<std::pair<int, int>, int> directed;
-        for (const auto& t : patch.triangles)
-          for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
-        std::set<std::pair<int, int>> boundary;
-        for (const auto& [edge, uses] : directed)
-          if (uses == 1 && directed.count({edge.second, edge.first}) == 0) boundary.insert(edge);
-        // Each step of a hole b -> a runs against a boundary edge a -> b, and no boundary edge twice.
-        // The step from a loop's last vertex back to its first is apart: where the boundary does not
-        // close (a non-manifold opening of a shared character) the walk stops and that step is the
-        // cap's, not an edge.
-        std::set<std::pair<int, int>> covered;
-        std::vector<std::pair<int, int>> closing;
-        bool every_step_on_boundary = true, none_twice = true;
-        for (const std::vector<int>& hole : patch.holes) {
-          CHECK(hole.size() >= 3);
-          for (size_t k = 0; k + 1 < hole.size(); ++k) {
-            const std::pair<int, int> edge{hole[k + 1], hole[k]};
-            every_step_on_boundary = every_step_on_boundary && boundary.count(edge) == 1;
-            none_twice = none_twice && covered.insert(edge).second;
-          }
-          closing.emplace_back(hole.front(), hole.back());
-        }
-        CHECK(every_step_on_boundary);
-        CHECK(none_twice);
-        // A cut of the sample's closed, manifold parts is closed by every boundary edge, once.
-        if (path == test::sampleGlbPath()) {
-          for (const auto& edge : closing) {
-            CHECK(boundary.count(edge) == 1);
-            CHECK(covered.insert(edge).second);
-          }
-          CHECK(covered.size() == boundary.size());
-          if (cut.size() < surface.whole.triangles.size()) CHECK(!patch.holes.empty());
-        }
+  forEachCut([](const std::string& path, const VolumeSurface& surface, const std::vector<Eigen::Vector3d>&, const std::vector<int>& cut,
+                const ClosedPatch& patch) {
+    REQUIRE(patch.triangles.size() == cut.size());
+    for (size_t i = 0; i < cut.size(); ++i) CHECK(patch.triangles[i] == surface.whole.triangles[static_cast<size_t>(cut[i])]);
+    // Boundary edges: a -> b used once and b -> a never.
+    std::map<std::pair<int, int>, int> directed;
+    for (const auto& t : patch.triangles)
+      for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
+    std::set<std::pair<int, int>> boundary;
+    for (const auto& [edge, uses] : directed)
+      if (uses == 1 && directed.count({edge.second, edge.first}) == 0) boundary.insert(edge);
+    // Each step of a hole b -> a runs against a boundary edge a -> b, and no boundary edge twice. The
+    // step from a loop's last vertex back to its first is apart: where the boundary does not close (a
+    // non-manifold opening of a shared character) the walk stops and that step is the cap's, not an
+    // edge.
+    std::set<std::pair<int, int>> covered;
+    std::vector<std::pair<int, int>> closing;
+    bool every_step_on_boundary = true, none_twice = true;
+    for (const std::vector<int>& hole : patch.holes) {
+      CHECK(hole.size() >= 3);
+      for (size_t k = 0; k + 1 < hole.size(); ++k) {
+        const std::pair<int, int> edge{hole[k + 1], hole[k]};
+        every_step_on_boundary = every_step_on_boundary && boundary.count(edge) == 1;
+        none_twice = none_twice && covered.insert(edge).second;
       }
+      closing.emplace_back(hole.front(), hole.back());
     }
-  }
+    CHECK(every_step_on_boundary);
+    CHECK(none_twice);
+    // A cut of the sample's closed, manifold parts is closed by every boundary edge, once.
+    if (path == test::sampleGlbPath()) {
+      for (const auto& edge : closing) {
+        CHECK(boundary.count(edge) == 1);
+        CHECK(covered.insert(edge).second);
+      }
+      CHECK(covered.size() == boundary.size());
+      if (cut.size() < surface.whole.triangles.size()) CHECK(!patch.holes.empty());
+    }
+  });
 }
 
 }  // namespace
