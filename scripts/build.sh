@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Configures and builds rigbake. Usage: scripts/build.sh [release|debug|asan]  (default: release)
+# Configures and builds rigbake. Usage: scripts/build.sh [release|debug|asan [target...]]
+# (default: release, every target)
 # Build trees: build/ (release, warnings as errors), build-asan/ (AddressSanitizer + UBSan).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -9,8 +10,11 @@ case "$kind" in
   debug) dir="$repo/build-debug"; args=(-DCMAKE_BUILD_TYPE=Debug) ;;
   # -O1 -g1: line tables for the sanitizers' stack traces, at half the compile time of -O2 -g.
   asan) dir="$repo/build-asan"; args=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1" -DRIGBAKE_SANITIZE=ON) ;;
-  *) echo "usage: scripts/build.sh [release|debug|asan]" >&2; exit 1 ;;
+  *) echo "usage: scripts/build.sh [release|debug|asan [target...]]" >&2; exit 1 ;;
 esac
 cmake -S "$repo" -B "$dir" -G Ninja -DRIGBAKE_WERROR=ON "${args[@]}" >/dev/null
-cmake --build "$dir" --parallel "$(nproc)"
+shift || true
+targets=()
+for target in "$@"; do targets+=(--target "$target"); done
+cmake --build "$dir" --parallel "$(nproc)" "${targets[@]}"
 echo "$dir"
