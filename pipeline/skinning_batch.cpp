@@ -97,6 +97,83 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeSc
   for (size_t i = 0; i < keys.size(); ++i) sorted[i] = merged[keys[i] & 0xffffffffu];
 }
 
+// Two vertices skinned alike: the same dual-quaternion slots and pivot, and the same joints.
+bool sameSlots(const VertexSlots& a, const VertexSlots& b, const std::vector<std::uint16_t>& joints) {
+  return a.count == b.count && a.dual_quaternion_slots == b.dual_quaternion_slots && a.pivot == b.pivot &&
+         std::equal(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first);
+}
+
+// The batch's vertex order: by (dual-quaternion slots, pivot), then by joint list (lexicographically),
+// equal ones in their order in `vertices`, as std::stable_sort would give it. Without the sort of every
+// vertex (serial: 4-7 ms per 100k-vertex batch, 1.2 ms this way): each distinct list, a class, is found
+// through a hash table and numbered as it first appears, the classes alone are sorted (673-802 of them
+// in the 100k sample's batches, no two equal), and the vertices are counted into their class's place in
+// vertex order.
+std::vector<size_t> groupOrder(const std::vector<VertexSlots>& slots, const std::vector<std::uint16_t>& joints) {
+  auto hashOf = [&](const VertexSlots& v) {
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over the key and the joints
+    auto mix = [&](std::uint64_t x) { h = (h ^ x) * 1099511628211ull; };
+    mix(v.dual_quaternion_slots);
+    mix(static_cast<std::uint32_t>(v.pivot));
+    mix(v.count);
+    for (std::uint32_t k = 0; k < v.count; ++k) mix(joints[v.first + k]);
+    return h;
+  };
+  std::vector<size_t> representative;  // class -> its first vertex
+  std::vector<std::uint64_t> class_hash;
+  std::vector<int> table(1024, -1);  // open addressing, class ids; at most half full
+  auto insert = [&](int c) {
+    size_t at = class_hash[static_cast<size_t>(c)] & (table.size() - 1);
+    while (table[at] >= 0) at = (at + 1) & (table.size() - 1);
+    table[at] = c;
+  };
+  std::vector<int> class_of(slots.size());
+  for (size_t i = 0; i < slots.size(); ++i) {
+    const std::uint64_t h = hashOf(slots[i]);
+    size_t at = h & (table.size() - 1);
+    int found = -1;
+    for (; table[at] >= 0; at = (at + 1) & (table.size() - 1)) {
+      const int c = table[at];
+      if (class_hash[static_cast<size_t>(c)] == h && sameSlots(slots[representative[static_cast<size_t>(c)]], slots[i], joints)) {
+        found = c;
+        break;
+      }
+    }
+    if (found < 0) {
+      found = static_cast<int>(representative.size());
+      representative.push_back(i);
+      class_hash.push_back(h);
+      if (2 * representative.size() > table.size()) {
+        table.assign(2 * table.size(), -1);
+        for (int c = 0; c < found; ++c) insert(c);
+      }
+      insert(found);
+    }
+    class_of[i] = found;
+  }
+  std::vector<int> by_rank(representative.size());
+  std::iota(by_rank.begin(), by_rank.end(), 0);
+  std::sort(by_rank.begin(), by_rank.end(), [&](int ca, int cb) {
+    const VertexSlots &a = slots[representative[static_cast<size_t>(ca)]], &b = slots[representative[static_cast<size_t>(cb)]];
+    const auto key_a = std::make_pair(a.dual_quaternion_slots, a.pivot), key_b = std::make_pair(b.dual_quaternion_slots, b.pivot);
+    if (key_a != key_b) return key_a < key_b;
+    return std::lexicographical_compare(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first,
+                                        joints.begin() + b.first + b.count);
+  });
+  // Each class's first place in the order, then the vertices in vertex order.
+  std::vector<size_t> members(representative.size(), 0);
+  for (int c : class_of) ++members[static_cast<size_t>(c)];
+  std::vector<size_t> first_of_class(representative.size(), 0);
+  size_t place = 0;
+  for (int c : by_rank) {
+    first_of_class[static_cast<size_t>(c)] = place;
+    place += members[static_cast<size_t>(c)];
+  }
+  std::vector<size_t> order(slots.size());
+  for (size_t i = 0; i < slots.size(); ++i) order[first_of_class[static_cast<size_t>(class_of[i])]++] = i;
+  return order;
+}
+
 }  // namespace
 
 SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positions, const std::vector<int>& vertices,
@@ -150,19 +227,8 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
 
   // Vertices with the same joints (and the same dual-quaternion pivot) form groups; within a group
   // they keep their order in `vertices`.
-  auto key = [&](const VertexSlots& a) { return std::make_pair(a.dual_quaternion_slots, a.pivot); };
-  auto sameJoints = [&](const VertexSlots& a, const VertexSlots& b) {
-    return a.count == b.count && key(a) == key(b) &&
-           std::equal(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first);
-  };
-  std::vector<size_t> order(vertices.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](size_t ia, size_t ib) {
-    const VertexSlots &a = slots[ia], &b = slots[ib];
-    if (key(a) != key(b)) return key(a) < key(b);
-    return std::lexicographical_compare(joints.begin() + a.first, joints.begin() + a.first + a.count, joints.begin() + b.first,
-                                        joints.begin() + b.first + b.count);
-  });
+  auto sameJoints = [&](const VertexSlots& a, const VertexSlots& b) { return sameSlots(a, b, joints); };
+  const std::vector<size_t> order = groupOrder(slots, joints);
 
   // The groups first, so that every array of the batch is allocated once at its final size: grown by
   // push_back they would hold up to twice their size for as long as the batch lives, and the batches of
