@@ -36,6 +36,9 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance);
 // used by one of them only. Edges shared by three or more triangles are left as they are.
 ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles);
 
+// The vertices (indices below `count`) a patch's triangles and holes use, each once, ascending.
+std::vector<int> patchVertices(const ClosedPatch& patch, size_t count);
+
 // Posed positions of the welded vertices, from the part's per-vertex positions.
 std::vector<Eigen::Vector3d> weldedPositions(const VolumeSurface& surface, const std::vector<Eigen::Vector3d>& positions);
 
