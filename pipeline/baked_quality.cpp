@@ -369,24 +369,22 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
       it->second = static_cast<int>(m);
     }
   }
+  std::vector<std::vector<std::vector<MuscleSkinVertex>>> skin_of_drawn;  // per drawn part, per muscle
+  if (!kind_order.empty()) {
+    for (const PicturePart& part : drawn)
+      skin_of_drawn.push_back(muscleSkin(part.weights->rig, part.surface.vertex_of_weld, joint_count, measured_muscles));
+  }
   for (const std::string& kind : kind_order) {
     const int m = kind_pick[kind];
     const MuscleSkinMove& move = pictured(static_cast<size_t>(m));
     size_t c = 0;
     while (c < clips.size() && clips[c].name != move.clip) ++c;
     if (c == clips.size()) continue;
-    // The muscle's skin: welded vertices with at least kMuscleSkinWeight of its skinned joint.
+    // The muscle's skin, as its figures took it.
     std::vector<std::vector<char>> on(drawn.size());
     for (size_t p = 0; p < drawn.size(); ++p) {
-      const InfluenceSet& rig = drawn[p].weights->rig;
       on[p].assign(drawn[p].surface.weldedCount(), 0);
-      for (int w = 0; w < drawn[p].surface.weldedCount(); ++w) {
-        const int v = drawn[p].surface.vertex_of_weld[w];
-        double weight = 0.0;
-        for (int k = 0; k < rig.slots_per_vertex; ++k)
-          if (rig.joints[v * rig.slots_per_vertex + k] == joint_count + m) weight += rig.weights[v * rig.slots_per_vertex + k];
-        on[p][w] = weight >= kMuscleSkinWeight;
-      }
+      for (const MuscleSkinVertex& vertex : skin_of_drawn[p][static_cast<size_t>(m)]) on[p][vertex.welded] = 1;
     }
     char ratio[32];
     std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);

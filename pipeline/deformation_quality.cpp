@@ -160,8 +160,7 @@ struct PreparedPart {
   // and the most joints a vertex's difference of weights has.
   std::array<double, kMaxApproximations> error_scale{};
   std::array<int, kMaxApproximations> widest{};
-  // Per muscle, the welded vertices carrying at least kMuscleSkinWeight of its skinned joint.
-  std::vector<std::vector<std::pair<int, double>>> muscle_skin;
+  std::vector<std::vector<MuscleSkinVertex>> muscle_skin;  // muscleSkin(): the muscles' skin, welded
 };
 
 struct FrameVolumes {
@@ -193,6 +192,29 @@ bool sameSlots(const InfluenceSet& set, size_t a, size_t b) {
 }
 
 }  // namespace
+
+std::vector<std::vector<MuscleSkinVertex>> muscleSkin(const InfluenceSet& rig, const std::vector<int>& vertex_of_weld,
+                                                      int joint_count, int muscle_count) {
+  std::vector<std::vector<MuscleSkinVertex>> skin(static_cast<size_t>(std::max(muscle_count, 0)));
+  const size_t slots = static_cast<size_t>(rig.slots_per_vertex);
+  for (size_t w = 0; w < vertex_of_weld.size(); ++w) {
+    const size_t first = static_cast<size_t>(vertex_of_weld[w]) * slots;
+    for (size_t k = 0; k < slots; ++k) {
+      const int joint = rig.joints[first + k];
+      const int m = joint - joint_count;
+      if (m < 0 || m >= muscle_count) continue;
+      // A joint named in more than one slot is summed once, at its first slot, in slot order.
+      bool named_before = false;
+      for (size_t j = 0; j < k && !named_before; ++j) named_before = rig.joints[first + j] == joint;
+      if (named_before) continue;
+      double weight = 0.0;
+      for (size_t j = k; j < slots; ++j)
+        if (rig.joints[first + j] == joint) weight += rig.weights[first + j];
+      if (weight >= kMuscleSkinWeight) skin[static_cast<size_t>(m)].push_back({static_cast<int>(w), weight});
+    }
+  }
+  return skin;
+}
 
 Eigen::Vector3d skinCentre(const Character& character, const std::vector<MeasuredPart>& parts) {
   Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
@@ -359,31 +381,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
         part.runs.back().end = part.ordered_corners.size();
       }
     }
-    if (quality) {
-      // The muscles' skin: a vertex counts for a muscle from kMuscleSkinWeight of its skinned joint.
-      const InfluenceSet& rig = part.weights->rig;
-      const size_t slots = static_cast<size_t>(rig.slots_per_vertex);
-      part.muscle_skin.resize(static_cast<size_t>(muscle_count));
-      // Each muscle's weight at a vertex, summed over its slots in slot order (the muscles a vertex has
-      // are few: its slots are read once, not once per muscle).
-      std::vector<std::pair<int, double>> vertex_muscles;
-      for (int w = 0; w < surface.weldedCount(); ++w) {
-        const size_t v = static_cast<size_t>(surface.vertex_of_weld[w]);
-        vertex_muscles.clear();
-        for (size_t k = 0; k < slots; ++k) {
-          const int m = rig.joints[v * slots + k] - joint_count;
-          if (m < 0 || m >= muscle_count) continue;
-          auto it = std::find_if(vertex_muscles.begin(), vertex_muscles.end(), [m](const auto& e) { return e.first == m; });
-          if (it == vertex_muscles.end()) {
-            vertex_muscles.emplace_back(m, 0.0);
-            it = vertex_muscles.end() - 1;
-          }
-          it->second += rig.weights[v * slots + k];
-        }
-        for (const auto& [m, weight] : vertex_muscles)
-          if (weight >= kMuscleSkinWeight) part.muscle_skin[static_cast<size_t>(m)].emplace_back(w, weight);
-      }
-    }
+    if (quality) part.muscle_skin = muscleSkin(part.weights->rig, surface.vertex_of_weld, joint_count, muscle_count);
     widest_surface = std::max(widest_surface, static_cast<size_t>(surface.weldedCount()));
   }
 
@@ -580,7 +578,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
       const int welded_count = part.surface.weldedCount();
       scratch.moved.assign(static_cast<size_t>(welded_count), 0);
       for (const MoveSums& move : moves)
-        for (const auto& vertex_weight : part.muscle_skin[static_cast<size_t>(move.muscle)]) scratch.moved[vertex_weight.first] = 1;
+        for (const MuscleSkinVertex& skin : part.muscle_skin[static_cast<size_t>(move.muscle)]) scratch.moved[skin.welded] = 1;
       scratch.moved_index.assign(static_cast<size_t>(welded_count), -1);
       scratch.moved_vertices.clear();
       auto need = [&](int w) {
@@ -604,14 +602,14 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
         for (int k = 0; k < 3; ++k) scratch.normals[scratch.moved_index[t[k]]] += area;
       }
       for (MoveSums& move : moves) {
-        for (const auto& [w, weight] : part.muscle_skin[static_cast<size_t>(move.muscle)]) {
-          const size_t i = static_cast<size_t>(scratch.moved_index[w]);
+        for (const MuscleSkinVertex& skin : part.muscle_skin[static_cast<size_t>(move.muscle)]) {
+          const size_t i = static_cast<size_t>(scratch.moved_index[skin.welded]);
           Eigen::Vector3d normal = scratch.normals[i];
           const double length = normal.norm();
           if (length > 0) normal /= length;
           const double along = (scratch.rig[i] - scratch.input[i]).dot(normal);
-          move.weighted += weight * along;
-          move.total += weight;
+          move.weighted += skin.weight * along;
+          move.total += skin.weight;
           move.max_out = std::max(move.max_out, along);
           move.max_in = std::max(move.max_in, -along);
           ++move.vertices;

@@ -79,6 +79,18 @@ struct MuscleQuality {
 // A vertex counts as driven by a muscle from this skin weight up.
 constexpr double kMuscleSkinWeight = 0.05;
 
+// A welded vertex of a muscle's skin and the muscle's weight there.
+struct MuscleSkinVertex {
+  int welded = -1;
+  double weight = 0.0;
+};
+
+// Per muscle m (joint joint_count + m of `rig`), the welded vertices (vertex_of_weld: welded -> vertex
+// of `rig`) with at least kMuscleSkinWeight of it, ascending, and that weight summed over the vertex's
+// slots in slot order: a muscle's skin as the figures, the fit and the pictures take it.
+std::vector<std::vector<MuscleSkinVertex>> muscleSkin(const InfluenceSet& rig, const std::vector<int>& vertex_of_weld,
+                                                      int joint_count, int muscle_count);
+
 struct DeformationQuality {
   double body_volume = 0.0;  // bind pose, cubic scene units
   std::vector<std::string> regions;

@@ -687,6 +687,12 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     side_sign[m] = muscles->parts[m].side == "Right" ? -1.0 : 1.0;
     for (int k = 0; k < kKeys; ++k) shapes[m][k] = kind[m] >= 0 ? keyShape(muscles->parts[m], k, stretched_at[kind[m]]) : KeyShape{};
   }
+  // Each fitted muscle's skin, as the figures take it (muscleSkin()), over the parts' moving vertices.
+  struct SkinVertex {
+    int part, vertex;  // fit part, moving index
+    double weight;
+  };
+  std::vector<std::vector<SkinVertex>> muscle_skin(muscle_count);
   for (size_t p = 0; p < parts.size(); ++p) {
     FitPart part;
     part.mesh = &character.meshes[parts[p].mesh_part];
@@ -733,6 +739,14 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     }
     std::vector<MuscleVertex>().swap(weld_slots);
     for (SplitPatch& split : part.patches) renumberMoving(moving_of_weld, part.moving_vertices.size(), &split);
+    const std::vector<std::vector<MuscleSkinVertex>> skin = muscleSkin(rig, surface.vertex_of_weld, joint_count, muscle_count);
+    for (int m = 0; m < muscle_count; ++m) {
+      if (kind[m] < 0) continue;
+      for (const MuscleSkinVertex& vertex : skin[static_cast<size_t>(m)]) {
+        const int c = moving_of_weld[static_cast<size_t>(vertex.welded)];
+        if (c >= 0) muscle_skin[static_cast<size_t>(m)].push_back({static_cast<int>(p), c, vertex.weight});
+      }
+    }
     for (SplitPatch& split : part.patches) {
       for (int c : split.touched) {
         if (part.hasSlots(c)) split.fitted.push_back(c);
@@ -786,21 +800,6 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       }
     }
     fit_parts.push_back(std::move(part));
-  }
-  // Each fitted muscle's skin, as the figures take it (deformation_quality.h): the moving vertices with
-  // at least kMuscleSkinWeight of it, and that weight.
-  struct SkinVertex {
-    int part, vertex;  // fit part, moving index
-    double weight;
-  };
-  std::vector<std::vector<SkinVertex>> muscle_skin(muscle_count);
-  for (size_t p = 0; p < fit_parts.size(); ++p) {
-    const FitPart& part = fit_parts[p];
-    for (int c = 0; c < static_cast<int>(part.moving_vertices.size()); ++c) {
-      for (const MuscleVertex* mv = part.slotsBegin(c); mv != part.slotsEnd(c); ++mv) {
-        if (mv->weight >= kMuscleSkinWeight) muscle_skin[mv->muscle].push_back({static_cast<int>(p), c, mv->weight});
-      }
-    }
   }
   // The moving vertices some fitted muscle's skin holds, per fit part, with all their muscle slots
   // (fitted or kept): the skin rows' rig-minus-input moves need those and nothing else.
