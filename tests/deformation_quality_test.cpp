@@ -9,6 +9,7 @@
 #include <set>
 
 #include "cli_support.h"
+#include "pipeline/deformation_quality.h"
 
 using namespace rigbake::test;
 
@@ -293,4 +294,25 @@ TEST_CASE("validate --rom: the clipless KayKit mannequin and Quaternius Soldier 
     std::string where;
     CHECK(worstRegionLoss(quality, &where) <= 1.0);
   }
+}
+
+TEST_CASE("muscle skin: a muscle's weight summed over the slots naming it, from kMuscleSkinWeight up, welded order") {
+  // Joints 0-2 are the skeleton's, 3 and 4 muscles 0 and 1, 5 beyond the muscles; three slots a vertex.
+  rigbake::InfluenceSet rig;
+  rig.slots_per_vertex = 3;
+  rig.joints = {3, 3, 0, /**/ 4, 1, 0, /**/ 4, 3, 2, /**/ 5, 0, 0};
+  rig.weights = {0.03, 0.03, 0.94, /**/ 0.05, 0.95, 0.0, /**/ 0.049, 0.2, 0.751, /**/ 0.5, 0.5, 0.0};
+  const std::vector<int> vertex_of_weld = {2, 0, 1, 3};  // welded -> part vertex
+  const auto skin = rigbake::muscleSkin(rig, vertex_of_weld, 3, 2);
+  REQUIRE(skin.size() == 2);
+  // Muscle 0: vertex 2 (welded 0) with 0.2; vertex 0 (welded 1) with its two slots summed, 0.06.
+  REQUIRE(skin[0].size() == 2);
+  CHECK(skin[0][0].welded == 0);
+  CHECK(skin[0][0].weight == 0.2);
+  CHECK(skin[0][1].welded == 1);
+  CHECK(skin[0][1].weight == 0.0 + 0.03 + 0.03);
+  // Muscle 1: vertex 1 (welded 2) at exactly the threshold; vertex 2's 0.049 is below it.
+  REQUIRE(skin[1].size() == 1);
+  CHECK(skin[1][0].welded == 2);
+  CHECK(skin[1][0].weight == rigbake::kMuscleSkinWeight);
 }
