@@ -2,9 +2,10 @@
 // peak resident memory. bench/run calls it once per input (a fresh process, so the peak is the
 // input's own) and prints the table.
 //
-// With `fitted` as the sixth argument the timed bake is a re-bake: a first, untimed bake fits the
-// muscles' response and the timed one bakes with the muscles it returned, as `bake --muscles` does with
-// the file a first `bake --muscles-out` wrote (`--response auto` keeps fitted curves: no fit stage).
+// A re-bake takes two processes, as a user's two commands: `fit MUSCLES.json` bakes once (untimed) and
+// writes the muscles with their fitted curves, as `bake --muscles-out` does; `fitted MUSCLES.json`
+// times a bake with them, read as `bake --muscles` reads them (`--response auto` keeps fitted curves: no
+// fit stage). In one process the re-bake's peak memory was the first bake's, and its heap was warm.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -17,6 +18,8 @@
 #include "formats/gltf_bake.h"
 #include "formats/gltf_document.h"
 #include "formats/gltf_write.h"
+#include "formats/muscle_json.h"
+#include "formats/atomic_file.h"
 #include "formats/preset_json.h"
 #include "pipeline/bake.h"
 
@@ -24,13 +27,19 @@ using namespace rigbake;
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [fitted]]]\n";
+    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [fit|fitted MUSCLES.json]]]\n";
     return 1;
   }
   const std::string input = argv[1], output = argv[2], presets = argv[3];
   const int influences = argc > 4 ? std::stoi(argv[4]) : 10;
   const int threads = argc > 5 ? std::stoi(argv[5]) : 0;  // 0: one per core, as bake --threads
-  const bool fitted = argc > 6 && std::string(argv[6]) == "fitted";
+  const std::string mode = argc > 6 ? argv[6] : "";
+  if (!mode.empty() && (argc < 8 || (mode != "fit" && mode != "fitted"))) {
+    std::cerr << "rigbake_bench: the sixth argument is 'fit' or 'fitted', followed by a muscle JSON path\n";
+    return 1;
+  }
+  const std::string muscles_path = argc > 7 ? argv[7] : "";
+  const bool fitted = mode == "fitted";
   auto clock = std::chrono::steady_clock::now();
   auto lap = [&clock]() {
     auto now = std::chrono::steady_clock::now();
@@ -48,7 +57,8 @@ int main(int argc, char** argv) {
     inputs.maps = &maps;
     inputs.rules = &rules;
     LandmarkSet landmarks = resolveLandmarks(loaded.character, inputs);
-    MuscleSet muscles = placeMuscles(loaded.character, landmarks, preset, Sides::kBoth);
+    MuscleSet muscles = fitted ? readMuscleJson(muscles_path, loaded.character, landmarks, preset)
+                               : placeMuscles(loaded.character, landmarks, preset, Sides::kBoth);
     BakeOptions options;
     options.influences = influences;
     options.threads = threads;
@@ -56,9 +66,10 @@ int main(int argc, char** argv) {
     // timed a lighter fit and lighter figures than the CLI runs.
     options.regions = resolveBodyRegions(loaded.character, landmarks, readRegionPreset(presets + "/regions/body.json"));
     const double place = lap();
-    if (fitted) {
-      muscles = bakeCharacter(loaded.character, muscles, options).muscles;
-      lap();  // untimed
+    if (mode == "fit") {
+      const MuscleSet fitted_muscles = bakeCharacter(loaded.character, muscles, options).muscles;
+      writeFileAtomically(muscles_path, muscleJson(fitted_muscles, loaded.character.skeleton, preset.name));
+      return 0;
     }
     BakeTimings timings;
     BakeResult bake = bakeCharacter(loaded.character, muscles, options, &timings);
