@@ -8,6 +8,7 @@
 #include "anatomy/placement.h"
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "cli/progress.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_bake.h"
 #include "formats/gltf_write.h"
@@ -28,6 +29,7 @@ struct BakeCommandOptions {
   std::string character;
   std::string muscles;
   std::string preset = "gow_biped";
+  std::string progress = "auto";  // --progress
   std::string output;
   std::string packed_output;
   std::string stats_output;
@@ -114,6 +116,8 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
 }
 
 int run(const BakeCommandOptions& options) {
+  ProgressLine progress("rigbake bake", options.progress);
+  progress.show("loading the character");
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
   // --rom: the range-of-motion clips join the character's own in memory only, so the weight rounding and
@@ -126,6 +130,7 @@ int run(const BakeCommandOptions& options) {
     appendMeasureOnlyClips(&resolved.loaded.character, rom);
   }
   const Character& character = resolved.loaded.character;
+  progress.show(options.muscles.empty() ? "placing the muscles" : "reading the muscles");
   MuscleSet muscles = options.muscles.empty()
                           ? placeMuscles(character, resolved.landmarks, preset, Sides::kBoth)
                           : readMuscleJson(options.muscles, character, resolved.landmarks, preset);
@@ -150,7 +155,9 @@ int run(const BakeCommandOptions& options) {
   if (options.springs_only && options.jiggle.empty()) fail("USAGE", "--vrm-springs-only", "needs --jiggle");
   BakeOptions baked_motion = bake_options;
   if (options.springs_only) baked_motion.jiggles.clear();
+  baked_motion.progress = progress.report();
   BakeResult bake = bakeCharacter(character, muscles, baked_motion);
+  progress.show("writing the files");
   nlohmann::json stats = statsJson(options, character, muscles, bake);
   if (!options.rom.empty()) stats["rom"] = romJson(rom, character.skeleton);
 
@@ -170,6 +177,7 @@ int run(const BakeCommandOptions& options) {
   if (!options.muscles_output.empty())
     writeFileAtomically(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
 
+  progress.clear();
   if (options.json) std::cout << stats.dump(2) << "\n";
   std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
             << bake.joints.size() << " joints) into " << options.output << ": " << bake.influences
@@ -292,6 +300,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                     "also bake them into the clips");
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print the figures as JSON on stdout");
+  addProgressOption(command, &options->progress);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
 }
 

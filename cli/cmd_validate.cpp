@@ -7,6 +7,7 @@
 #include "anatomy/error.h"
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "cli/progress.h"
 #include "cli/validation_run.h"
 #include "formats/report_json.h"
 #include "formats/validate_config.h"
@@ -26,10 +27,12 @@ struct ValidateCommandOptions {
   bool pictures = true;
   bool khronos = false;
   bool json = false;
+  std::string progress = "auto";
   PresetOptions presets;
 };
 
 int run(const ValidateCommandOptions& options) {
+  ProgressLine progress("rigbake validate", options.progress);
   ValidationRequest request;
   request.baked = options.baked;
   request.muscles = options.muscles;
@@ -40,8 +43,11 @@ int run(const ValidateCommandOptions& options) {
   request.rom = options.rom;
   request.regions = options.regions;
   request.pictures = options.pictures;
+  request.progress = progress.report();
   const Report report = validateBakedFile(request);
+  progress.show("writing the reports");
   writeReports(report, reportPathsIn(options.report_dir));
+  progress.clear();
   const std::string character_name = fileNameOf(options.baked);
 
   if (options.json) std::cout << reportJson(report);
@@ -94,6 +100,7 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
   command->add_flag("!--no-pictures", options->pictures,
                     "Leave the deformation pictures out of report.html (the figures stay)");
   command->add_flag("--json", options->json, "Also print report.json on stdout");
+  addProgressOption(command, &options->progress);
   addPresetOptions(command, &options->presets);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
 }

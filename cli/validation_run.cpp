@@ -80,6 +80,7 @@ Report validateBakedFile(const ValidationRequest& request) {
   LandmarkSet landmarks;
   bool landmarks_resolved = true;
   std::string landmark_problem;
+  reportProgress(request.progress, "loading the character");
   try {
     ResolvedCharacter resolved = loadAndResolve(request.baked, request.presets);
     loaded = std::move(resolved.loaded);
@@ -112,14 +113,20 @@ Report validateBakedFile(const ValidationRequest& request) {
   inputs.file = &file;
   BakedQuality quality;
   if (landmarks_resolved) {
+    reportProgress(request.progress, request.pictures ? "measuring every frame and drawing the pictures" : "measuring every frame");
     BakedQualityOptions quality_options;
     quality_options.pictures = request.pictures;
     quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(request.presets, "regions", request.regions)),
                                   file, quality_options);
     inputs.quality = &quality;
   }
-  if (request.khronos) inputs.khronos = runKhronosValidator(request.baked);
-  else inputs.khronos.skip_reason = "not requested (pass --khronos)";
+  if (request.khronos) {
+    reportProgress(request.progress, "running the Khronos glTF-Validator");
+    inputs.khronos = runKhronosValidator(request.baked);
+  } else {
+    inputs.khronos.skip_reason = "not requested (pass --khronos)";
+  }
+  reportProgress(request.progress, "checking");
   return validateBakedCharacter(inputs, request.config);
 }
 

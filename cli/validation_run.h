@@ -6,6 +6,7 @@
 #include <string>
 
 #include "cli/common.h"
+#include "pipeline/progress.h"
 #include "pipeline/checks.h"
 
 namespace rigbake::cli {
@@ -20,6 +21,7 @@ struct ValidationRequest {
   std::string rom;            // ROM preset (name or path) whose clips are measured too, or empty
   std::string regions = "body";  // region preset for the deformation-quality figures (name or path)
   bool pictures = true;       // render the deformation pictures for report.html
+  ProgressReport progress;    // told of each stage as it starts; may be empty
 };
 
 Report validateBakedFile(const ValidationRequest& request);

@@ -252,6 +252,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   const double body_height = muscles.body_height;
 
   // Where each muscle takes weight, and from which joint: its carrier, chosen from those shares.
+  reportProgress(options.progress, "weighting the muscles' skin");
   const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height, options.threads);
   std::vector<SurfaceGraph> surfaces;
   std::vector<MuscleShares> shares;
@@ -316,6 +317,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     // The prior keeps the weight it has against every frame (up to prior_poses of them) when the fit
     // takes fewer.
     ResponseFitOptions fit_options = options.fit;
+    if (!fit_options.progress) fit_options.progress = options.progress;
     fit_options.pose_weight =
         static_cast<double>(std::min(samples.size(), static_cast<size_t>(std::max(1, fit_options.prior_poses)))) / poses.size();
     result.fit =
@@ -325,6 +327,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   const runtime::MuscleRig<double> rig = buildMuscleRig(rigged, skeleton);
 
   // Joints: bind and rest transforms.
+  reportProgress(options.progress, "sampling every clip");
   const Pose rest = restPose(skeleton);
   const RigEvaluation at_bind = evaluateRig(rig, bindPose(skeleton), true);
   const RigEvaluation at_rest = evaluateRig(rig, rest, true);
@@ -405,6 +408,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   std::vector<InfluenceSet> milli_beside(unorm16 ? measured.size() : 0);
   std::vector<QuantizedInfluences> fine_local(unorm16 ? measured.size() : 0);  // skin-local, for WEIGHTS_n
   // Every part pruned, then rounded together (they share the moments of their joints' motion).
+  reportProgress(options.progress, "rounding the weights against every frame");
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
   for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences, options.threads));
@@ -493,6 +497,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     }
     clips.push_back(std::move(clip));
   }
+  reportProgress(options.progress, "measuring every frame");
   DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
                                                     options.measure_quality, error_weights, options.threads);
   if (options.measure_quality) result.quality = std::move(measures.quality);
@@ -501,6 +506,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);
   timing.error = lap();
 
+  reportProgress(options.progress, "packing the weights");
   // The written attributes and packed buffers last: built before the figures, they were 7 MB of the
   // bake's peak at 100k vertices, which the figures' skinning batches set.
   for (size_t a = 0; a < result.parts.size(); ++a) {

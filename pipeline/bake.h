@@ -19,6 +19,7 @@
 #include "pipeline/jiggle.h"
 #include "pipeline/muscle_weights.h"
 #include "pipeline/pack_influences.h"
+#include "pipeline/progress.h"
 #include "pipeline/response_fit.h"
 
 namespace rigbake {
@@ -60,6 +61,8 @@ struct BakeOptions {
   int threads = 0;
   MuscleMotion motion = MuscleMotion::kRuntime;
   bool helper_joints = false;  // also write base, tip and driver as nodes (and, when sampled, channels)
+  // Told of each stage as it starts and of the fit's passes (pipeline/progress.h); may be empty.
+  ProgressReport progress;
 };
 
 // The four joints of one muscle group. Each is a new node: the skinned joint is also added to every

@@ -849,6 +849,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   std::vector<std::vector<double>> input_region_change(poses.size(), std::vector<double>(region_count, 0.0));
   // [pose][part * patch_count + patch]
   std::vector<std::vector<FixedVolume>> fixed_volume(poses.size(), std::vector<FixedVolume>(fit_parts.size() * patch_count));
+  const char* const kStage = "fitting the muscles' response";
+  const int passes = options.iterations + 2;
+  reportProgress(options.progress, kStage, 0, passes);
   {
     applyTheta(theta);
     const runtime::MuscleRig<double> start_rig = buildMuscleRig(*muscles, skeleton);
@@ -947,6 +950,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     for (size_t p = 0; p < part_count; ++p) scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
   }
   for (int iteration = 0; iteration <= options.iterations; ++iteration) {
+    reportProgress(options.progress, kStage, 1 + iteration, passes);
     applyTheta(theta);
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
     // Each pose's rows are built on its own and joined in pose order, so any thread count gives the

@@ -15,6 +15,7 @@
 #include "anatomy/muscle_set.h"
 #include "pipeline/deformation_quality.h"
 #include "pipeline/pose.h"
+#include "pipeline/progress.h"
 #include "runtime/muscle_rig.h"
 
 namespace rigbake {
@@ -31,6 +32,9 @@ struct ResponseFitOptions {
   // Levenberg-Marquardt steps (each re-linearizes the volumes). Measured on the mannequin: after five
   // the figures move by 0.02 points or less.
   int iterations = 6;
+  // Told of each pass over the poses as it starts: the pass that measures the fixed pieces, then
+  // iterations + 1 Levenberg-Marquardt passes (the last only measures).
+  ProgressReport progress;
   // Marquardt's lambda (x the diagonal of the normal equations) before the first step, which is
   // taken at a third of it. Measured on the mannequin: from 0.3 the first three steps overshoot
   // (objective 3.1 -> 1,243, 1,131, 396: the volumes are cubic in the skin's positions and the step

@@ -129,6 +129,35 @@ TEST_CASE("cli bake: the same inputs give byte-identical files, with or without 
   CHECK(a == b);
 }
 
+TEST_CASE("cli bake: --progress always names each stage and the fit's passes in order; the files do not change") {
+  TempDir dir;
+  CliResult shown = runCli("bake " + sampleGlbPathForCli() + " --influences 7 -o " + (dir / "shown.glb") + " --progress always");
+  CliResult quiet = runCli("bake " + sampleGlbPathForCli() + " --influences 7 -o " + (dir / "quiet.glb") + " --progress never");
+  INFO(shown.err);
+  REQUIRE(shown.exit_code == 0);
+  REQUIRE(quiet.exit_code == 0);
+  CHECK(slurp(dir / "shown.glb") == slurp(dir / "quiet.glb"));
+  CHECK(quiet.err.find("rigbake bake:") == std::string::npos);
+  // Not a terminal: one line per step, then the same results as without.
+  std::vector<std::string> expected = {"loading the character", "placing the muscles", "weighting the muscles' skin"};
+  for (int pass = 1; pass <= 8; ++pass) expected.push_back("fitting the muscles' response, step " + std::to_string(pass) + " of 8");
+  for (const char* stage : {"sampling every clip", "rounding the weights against every frame", "measuring every frame",
+                            "packing the weights", "writing the files"})
+    expected.push_back(stage);
+  size_t at = 0;
+  for (const std::string& step : expected) {
+    INFO(step);
+    const size_t found = shown.err.find("rigbake bake: " + step + " (", at);
+    REQUIRE(found != std::string::npos);
+    at = found;
+  }
+  CHECK(shown.err.find("\r") == std::string::npos);
+  std::string results = shown.err.substr(shown.err.find("baked "));
+  results.replace(results.find("shown.glb"), 9, "quiet.glb");
+  CHECK(results == quiet.err);
+  CHECK(lineCount(shown.err) == lineCount(quiet.err) + static_cast<int>(expected.size()));
+}
+
 TEST_CASE("cli bake: bad input gives one line, a stable code, and no output files") {
   TempDir dir;
   const std::string out = dir / "baked.glb";

@@ -2,6 +2,8 @@
 // exits 0; a muscle file with a locator 1 m off makes it exit 1 with LOCATOR_NEAR_SURFACE failed in
 // every report; a bad config is exit 3 and writes nothing; the report is byte-identical across runs,
 // and Chromium renders it.
+#include <map>
+
 #include "validate_fixture.h"
 
 using namespace rigbake;
@@ -139,17 +141,29 @@ TEST_CASE("cli validate: --config overrides a threshold, a malformed config is e
   CHECK(!std::filesystem::exists(out / "none"));
 }
 
-TEST_CASE("cli validate: two runs write byte-identical reports") {
+TEST_CASE("cli validate: two runs write byte-identical reports, the second showing its progress") {
   const CliBake& bake = cliBake();
   test::TempDir out;
+  std::map<std::string, test::CliResult> runs;
   for (const char* name : {"a", "b"}) {
-    REQUIRE(runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(bake.muscles) +
-                   " --report " + ext::shellQuote(out / name))
-                .exit_code == 0);
+    runs[name] = runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(bake.muscles) + " --report " +
+                        ext::shellQuote(out / name) + (std::string(name) == "b" ? " --progress always" : ""));
+    INFO(runs[name].err);
+    REQUIRE(runs[name].exit_code == 0);
   }
   for (const char* file : {"report.json", "report.junit.xml", "report.html"}) {
     INFO(file);
     CHECK(slurp(out / (std::string("a/") + file)) == slurp(out / (std::string("b/") + file)));
+  }
+  // Not a terminal: the default shows nothing; `always` one line per stage, in order.
+  CHECK(runs["a"].err.find("rigbake validate:") == std::string::npos);
+  size_t at = 0;
+  for (const char* stage : {"loading the character", "measuring every frame and drawing the pictures", "checking",
+                            "writing the reports"}) {
+    INFO(stage);
+    const size_t found = runs["b"].err.find(std::string("rigbake validate: ") + stage + " (", at);
+    REQUIRE(found != std::string::npos);
+    at = found;
   }
 }
 
