@@ -227,9 +227,13 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand(
       "bake",
       "Bake muscle joints into a character: per muscle a base, tip, driver and skinned joint (the skinned one "
-      "volume-preserving, docs/muscle-model.md) added to the skeleton and every skin, animated over every clip, "
-      "with skin weights pruned to 4, 7 or 10 influences per vertex at 0.001 precision, written as JOINTS_n/WEIGHTS_n "
-      "and as packed buffers (docs/packed-influences.md). Reports the deformation error of the pruning in mm.");
+      "volume-preserving, docs/muscle-model.md) added to the skeleton and every skin, with the muscles' response "
+      "(bulge, scale) fitted to the character's clips so that the skin keeps its volume where plain skinning loses "
+      "it; skin weights pruned to 4, 7 or 10 influences per vertex at 0.001 precision, written as JOINTS_n/WEIGHTS_n "
+      "and as packed buffers (docs/packed-influences.md). By default the muscles move at run time from the "
+      "RIGBAKE_muscle_rig extension, adding no animation data (docs/runtime.md). Reports the weights' deformation "
+      "error in mm and the volume per clip against plain and dual-quaternion skinning (--stats for every body "
+      "region).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
   command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
   command->add_option("--muscles", options->muscles,
