@@ -36,7 +36,10 @@ void ProgressLine::show(const ProgressStep& step) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   char count[48] = "";
   // The step under way: `done` are finished.
-  if (step.total > 0) std::snprintf(count, sizeof(count), ", step %d of %d", step.done < step.total ? step.done + 1 : step.total, step.total);
+  if (step.total > 0) {
+    const int under_way = step.done < step.total ? step.done + 1 : step.total;
+    std::snprintf(count, sizeof(count), ", step %d of %d", under_way, step.total);
+  }
   // In place: back to the line's start and clear it first (a shorter line would leave the old tail).
   std::fprintf(stderr, "%s%s: %s%s (%.1f s)%s", in_place_ ? "\r\033[K" : "", command_.c_str(), step.stage, count, seconds,
                in_place_ ? "" : "\n");

@@ -24,9 +24,9 @@ class ProgressLine {
   ProgressLine& operator=(const ProgressLine&) = delete;
 
   void show(const ProgressStep& step);
+  void show(const char* stage) { show(ProgressStep{stage, 0, 0}); }
   // Erases a line shown in place (before the command prints its results).
   void clear();
-  void show(const char* stage) { show(ProgressStep{stage, 0, 0}); }
   // A report for the pipeline that shows each step here; empty when nothing is shown.
   ProgressReport report();
 
