@@ -129,7 +129,7 @@ TEST_CASE("cli bake: the same inputs give byte-identical files, with or without 
   CHECK(a == b);
 }
 
-TEST_CASE("cli bake: --progress always names each stage and the fit's passes in order; the files do not change") {
+TEST_CASE("cli bake: --progress always names each stage and the fit's passes in order, and the files do not change") {
   TempDir dir;
   CliResult shown = runCli("bake " + sampleGlbPathForCli() + " --influences 7 -o " + (dir / "shown.glb") + " --progress always");
   CliResult quiet = runCli("bake " + sampleGlbPathForCli() + " --influences 7 -o " + (dir / "quiet.glb") + " --progress never");
