@@ -11,7 +11,8 @@
 #   node               nodejs (any vendor's) and the npm tools in .tools/ (scripts/install-validator.sh,
 #                      scripts/install-gltf-transform.sh)
 #   glslangValidator   glslang-tools
-#   /usr/bin/python3   python3 + python3-jsonschema (tests/check_preset_schemas.py); python3 for the XML check
+#   /usr/bin/python3   python3 + python3-jsonschema (tests/check_preset_schemas.py); python3 for the XML check;
+#                      its pty module for the terminal progress test (cli_bake_test)
 #   ninja              ninja-build (cli_build_test runs the emitted Ninja file)
 #   gltfpack           gltfpack (compressed inputs: EXT_meshopt_compression, KHR_mesh_quantization)
 #   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression)
@@ -143,6 +144,10 @@ elif ! /usr/bin/python3 -c 'import jsonschema; jsonschema.Draft202012Validator' 
 fi
 if ! python3 -c 'import xml.etree.ElementTree' >/dev/null 2>&1; then
   missing "python3 on PATH cannot parse XML (Debian package python3)"
+fi
+# The progress test runs a bake on a pseudo-terminal (Python's pty module, standard library).
+if ! /usr/bin/python3 -c 'import pty, os; pid, fd = pty.fork(); os._exit(0) if pid == 0 else os.waitpid(pid, 0)' >/dev/null 2>&1; then
+  missing "/usr/bin/python3 cannot open a pseudo-terminal (pty module; Debian package python3, and /dev/pts mounted)"
 fi
 
 if ! have ninja; then

@@ -158,6 +158,37 @@ TEST_CASE("cli bake: --progress always names each stage and the fit's passes in 
   CHECK(lineCount(shown.err) == lineCount(quiet.err) + static_cast<int>(expected.size()));
 }
 
+TEST_CASE("cli bake: on a terminal the progress is one line rewritten in place, erased before the results or an error") {
+  // A pseudo-terminal from Python's standard library (scripts/check-tools.sh checks it opens): the bake's
+  // stderr is then a terminal, as when a person runs it.
+  TempDir dir;
+  auto onTerminal = [&](const std::string& args) {
+    const std::string out = dir / "terminal.out";
+    const std::string command = "/usr/bin/python3 -c 'import os, pty, sys; sys.exit(os.waitstatus_to_exitcode(pty.spawn(sys.argv[1:])))' " +
+                                std::string(RIGBAKE_CLI) + " " + args + " >" + out + " 2>&1 </dev/null";
+    const int status = std::system(command.c_str());
+    INFO(command);
+    REQUIRE(WIFEXITED(status));
+    return std::make_pair(WEXITSTATUS(status), slurp(out));
+  };
+  const std::string erase = "\r\x1b[K";
+  const auto [code, shown] = onTerminal("bake " + sampleGlbPathForCli() + " --influences 7 -o " + (dir / "baked.glb"));
+  INFO(shown);
+  CHECK(code == 0);
+  CHECK(shown.rfind(erase + "rigbake bake: loading the character (", 0) == 0);
+  CHECK(shown.find(erase + "rigbake bake: fitting the muscles' response, step 8 of 8 (") != std::string::npos);
+  // The last step's line is erased and the results start where it was, on their own lines.
+  const size_t results = shown.find(erase + "baked 38 muscles");
+  REQUIRE(results != std::string::npos);
+  CHECK(shown.find("rigbake bake:", results) == std::string::npos);
+  CHECK(shown.substr(0, results).find('\n') == std::string::npos);
+  // A failure erases the line before its one error line.
+  const auto [failed_code, failed] = onTerminal("bake " + (dir / "missing.glb") + " -o " + (dir / "never.glb"));
+  CHECK(failed_code == 2);
+  CHECK(failed.find(erase + "IO_FILE_NOT_FOUND " + (dir / "missing.glb")) != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "never.glb"));
+}
+
 TEST_CASE("cli bake: bad input gives one line, a stable code, and no output files") {
   TempDir dir;
   const std::string out = dir / "baked.glb";
