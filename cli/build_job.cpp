@@ -84,8 +84,9 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
 
 // Validates the written model against its muscle file and writes the three reports; returns how many
 // error-severity checks failed.
-int validateCharacter(const CharacterOutputs& out, const BuildCharacter& character, const SharedPresets& presets) {
+int validateCharacter(const CharacterOutputs& out, const BuildCharacter& character, const SharedPresets& presets, int threads) {
   ValidationRequest request;
+  request.threads = threads;  // the job's share of the cores, as its bake
   request.baked = out.model;
   request.muscles = out.muscles;
   request.preset = character.preset;
@@ -192,7 +193,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     JobOutcome outcome;
     outcome.name = character.name;
     outcome.status = JobStatus::kBuilt;
-    outcome.checks_failed = validateCharacter(out, character, presets);
+    outcome.checks_failed = validateCharacter(out, character, presets, bake_threads);
     writeStamp(out, hash, outcome);
     return outcome;
   } catch (const Error& error) {

@@ -28,6 +28,7 @@ struct ValidateCommandOptions {
   bool khronos = false;
   bool json = false;
   std::string progress = "auto";
+  int threads = 0;
   PresetOptions presets;
 };
 
@@ -44,6 +45,7 @@ int run(const ValidateCommandOptions& options) {
   request.regions = options.regions;
   request.pictures = options.pictures;
   request.progress = progress.report();
+  request.threads = options.threads;
   const Report report = validateBakedFile(request);
   progress.show("writing the reports");
   writeReports(report, reportPathsIn(options.report_dir));
@@ -100,6 +102,10 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
   command->add_flag("!--no-pictures", options->pictures,
                     "Leave the deformation pictures out of report.html (the figures stay)");
   command->add_flag("--json", options->json, "Also print report.json on stdout");
+  command->add_option("--threads", options->threads,
+                      "Threads for the per-frame measures (0 = one per core); the reports are byte-identical at any count")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   addProgressOption(command, &options->progress);
   addPresetOptions(command, &options->presets);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

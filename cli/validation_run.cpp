@@ -111,11 +111,13 @@ Report validateBakedFile(const ValidationRequest& request) {
   inputs.landmark_problem = landmark_problem;
   inputs.muscles = request.muscles.empty() ? nullptr : &muscles;
   inputs.file = &file;
+  inputs.threads = request.threads;
   BakedQuality quality;
   if (landmarks_resolved) {
     reportProgress(request.progress, request.pictures ? "measuring every frame and drawing the pictures" : "measuring every frame");
     BakedQualityOptions quality_options;
     quality_options.pictures = request.pictures;
+    quality_options.threads = request.threads;
     quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(request.presets, "regions", request.regions)),
                                   file, quality_options);
     inputs.quality = &quality;

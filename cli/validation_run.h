@@ -22,6 +22,7 @@ struct ValidationRequest {
   std::string regions = "body";  // region preset for the deformation-quality figures (name or path)
   bool pictures = true;       // render the deformation pictures for report.html
   ProgressReport progress;    // told of each stage as it starts; may be empty
+  int threads = 0;            // for the per-frame measures; 0: one per core (the reports are the same at any count)
 };
 
 Report validateBakedFile(const ValidationRequest& request);

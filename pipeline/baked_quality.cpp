@@ -14,6 +14,7 @@
 
 #include "pipeline/influences.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/skin_volume.h"
 #include "pipeline/skinning.h"
@@ -188,7 +189,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   for (size_t c = 0; c < character.clips.size(); ++c) addClip(&character.clips[c], c);
   if (character.clips.empty()) addClip(nullptr, 0);
 
-  out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips);
+  out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
   out.measured = true;
   if (!options.pictures) return out;
 
@@ -217,9 +218,21 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
       if (std::abs(times[t] - time) < std::abs(times[best] - time)) best = t;
     return best;
   };
-  // Draws one sample, framed on the welded vertices `subject(part, welded vertex)` picks.
-  auto draw = [&](const std::string& title, size_t c, double time, const std::string& subject_name,
-                  const std::function<bool(size_t, int)>& subject) {
+  // A picture to draw: one sample of clip `clip`, framed on the welded vertices `on` marks per part.
+  struct PictureRequest {
+    std::string title, subject_name;
+    size_t clip = 0;
+    double time = 0.0;
+    std::vector<std::vector<char>> on;
+  };
+  std::vector<PictureRequest> requests;
+  // Draws one request into `picture`; false when it frames nothing.
+  auto draw = [&](const PictureRequest& request, QualityPicture* drawn_picture) {
+    const std::string& title = request.title;
+    const size_t c = request.clip;
+    const double time = request.time;
+    const std::string& subject_name = request.subject_name;
+    auto subject = [&request](size_t p, int w) { return request.on[p][static_cast<size_t>(w)] != 0; };
     const SkinFrame& frame = frames[c][sampleIndex(c, time)];
     std::vector<std::vector<Eigen::Vector3d>> input(drawn.size()), rig(drawn.size()), normals(drawn.size());
     std::vector<std::vector<double>> along(drawn.size());
@@ -239,7 +252,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
         ++count;
       }
     }
-    if (count == 0) return;
+    if (count == 0) return false;
     centre /= count;
     QualityPicture picture;
     picture.title = title;
@@ -301,7 +314,8 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     const int size = options.picture_size;
     picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
                                      renderSurfaces(heat, camera, size, size)});
-    out.pictures.push_back(std::move(picture));
+    *drawn_picture = std::move(picture);
+    return true;
   };
 
   // Welded vertices of each part on a region's triangles.
@@ -331,10 +345,9 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     if (worst < 0) continue;
     const int r = regionIndex(quality.regions[worst]);
     if (r < 0) continue;
-    const std::vector<std::vector<char>> on = regionVertices(r);
     const double time = figures.regions[worst].rig.time;
-    draw(figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], c, time, quality.regions[worst],
-         [&](size_t p, int w) { return on[p][w] != 0; });
+    requests.push_back({figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
+                        time, regionVertices(r)});
   }
   // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side;
   // each corrective kind where its skin moves most, compressed or stretched (a raised arm's armpit).
@@ -389,11 +402,18 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     char ratio[32];
     std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);
     const bool stretched = move.ratio > 1.0;
-    draw(quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") + " at its most " +
-             (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " + move.clip + " at " +
-             formatSeconds(move.time),
-         c, move.time, quality.muscles[m].muscle, [&](size_t p, int w) { return on[p][w] != 0; });
+    requests.push_back({quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") +
+                            " at its most " + (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " +
+                            move.clip + " at " + formatSeconds(move.time),
+                        quality.muscles[m].muscle, c, move.time, std::move(on)});
   }
+  // Each picture on its own (the requests only read the frames, the surfaces and the figures), in the
+  // requests' order.
+  std::vector<QualityPicture> pictures(requests.size());
+  std::vector<char> framed(requests.size(), 0);
+  parallelForEach(options.threads, requests.size(), [&](size_t i) { framed[i] = draw(requests[i], &pictures[i]); });
+  for (size_t i = 0; i < requests.size(); ++i)
+    if (framed[i]) out.pictures.push_back(std::move(pictures[i]));
   return out;
 }
 

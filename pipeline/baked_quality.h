@@ -21,6 +21,7 @@ namespace rigbake {
 struct BakedQualityOptions {
   int picture_size = 200;  // pixels, each of the three panels (square)
   bool pictures = true;
+  int threads = 1;  // frames measured on this many threads (0: one per core); the same figures at any count
 };
 
 // Needs the file's muscle nodes (skinned ones with a carrier joint) and the landmarks; without them

@@ -267,6 +267,7 @@ struct ValidationInputs {
   const BakedFileData* file = nullptr;
   const BakedQuality* quality = nullptr;  // nullptr: not measured (the checks say why)
   ExternalValidation khronos;
+  int threads = 1;  // for the per-frame measures (pipeline/parallel.h); every figure is the same at any count
 };
 
 // Every check of checkDefinitions(), in that order, plus the plot data.
@@ -296,7 +297,8 @@ std::vector<ClipRatios> muscleRatiosOverClips(const Character& character, const 
 std::vector<std::int64_t> influenceHistogram(const BakedFileData& file);
 // Skins every vertex with the packed weights and with the file's standard weights at every sample time
 // of every clip (the clip's key times) and measures the displacement between them.
-std::vector<ClipDeformation> packedDeformationPerClip(const Character& character, const BakedFileData& file);
+// On `threads` threads (pipeline/parallel.h: 0 one per core); the same figures at any count.
+std::vector<ClipDeformation> packedDeformationPerClip(const Character& character, const BakedFileData& file, int threads = 1);
 Figure bodyFigure(const Character& character, const LandmarkSet& landmarks, const MuscleSet* muscles);
 
 // The skin matrices of a baked file's skeleton for a pose (joint world * inverse bind), with each
