@@ -784,8 +784,6 @@ std::vector<ClipDeformation> packedDeformationPerClip(const Character& character
   std::vector<ClipDeformation> result;
   if (parts.empty()) return result;
   const Skeleton& skeleton = character.skeleton;
-  std::vector<Eigen::Affine3d> inverse_bind(skeleton.size());
-  for (int j = 0; j < skeleton.size(); ++j) inverse_bind[j] = skeleton.bind_world[j].inverse();
   // A block of frames' skin matrices at a time, each part's error at every frame of it on the threads,
   // combined in frame order and within a frame in part order: one frame after another gave the same.
   constexpr size_t kFramesPerBlock = 64;
