@@ -93,7 +93,7 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
   request.presets.presets_dir = presets.directory;
   request.rom = character.rom;
   const Report report = validateBakedFile(request);
-  writeReports(report, {out.report_json, out.report_junit, out.report_html});
+  writeReports(report, {out.report_json, out.report_junit, out.report_html}, threads);
   int failed = 0;
   for (const CheckResult& check : report.checks)
     failed += check.status == CheckStatus::kFail && check.severity == Severity::kError;

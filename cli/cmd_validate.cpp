@@ -48,7 +48,7 @@ int run(const ValidateCommandOptions& options) {
   request.threads = options.threads;
   const Report report = validateBakedFile(request);
   progress.show("writing the reports");
-  writeReports(report, reportPathsIn(options.report_dir));
+  writeReports(report, reportPathsIn(options.report_dir), options.threads);
   progress.clear();
   const std::string character_name = fileNameOf(options.baked);
 

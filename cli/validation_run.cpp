@@ -136,10 +136,10 @@ ReportPaths reportPathsIn(const std::string& directory) {
   return {directory + "/report.json", directory + "/report.junit.xml", directory + "/report.html"};
 }
 
-void writeReports(const Report& report, const ReportPaths& paths) {
+void writeReports(const Report& report, const ReportPaths& paths, int threads) {
   const std::string json = reportJson(report);
   const std::string junit = reportJunit({report});
-  const std::string html = reportHtml(report);
+  const std::string html = reportHtml(report, threads);
   for (const std::string& path : {paths.json, paths.junit, paths.html}) {
     std::error_code error;
     std::filesystem::path parent = std::filesystem::path(path).parent_path();

@@ -32,6 +32,7 @@ struct ReportPaths {
   std::string json, junit, html;
 };
 ReportPaths reportPathsIn(const std::string& directory);
-void writeReports(const Report& report, const ReportPaths& paths);
+// `threads` encode the pictures (0: one per core); the files are the same at any count.
+void writeReports(const Report& report, const ReportPaths& paths, int threads = 0);
 
 }  // namespace rigbake::cli

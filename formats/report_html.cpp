@@ -11,6 +11,7 @@
 
 #include "formats/png_write.h"
 #include "formats/report_junit.h"
+#include "pipeline/parallel.h"
 
 namespace rigbake {
 namespace {
@@ -583,7 +584,8 @@ std::string percent(double fraction) {
 
 // Volume change per clip (whole body) and the worst regions, input skinning / dual quaternions / rig,
 // then the pictures.
-std::string qualitySection(const Report& report) {
+// `picture_uris`: each of report.quality.pictures as a PNG data URI, in order.
+std::string qualitySection(const Report& report, const std::vector<std::string>& picture_uris) {
   const BakedQuality& baked = report.quality;
   std::string html = "<section id=\"quality\"><h2>Deformation quality: volume and bulge</h2>\n<p class=\"explain\">"
                      "Largest volume change against the bind pose over each clip, in percent, of the input skinning "
@@ -620,12 +622,13 @@ std::string qualitySection(const Report& report) {
     html += "<p class=\"explain\">Each picture: the input skinning, the baked rig, and the rig coloured by its skin's move "
             "along the surface normal against the input skinning (red out, blue in, white none; colour grows with the square root of the move, full at the "
             "largest). The same camera for the three panels.</p>\n<div class=\"pictures\">\n";
-    for (const QualityPicture& picture : baked.pictures) {
+    for (size_t i = 0; i < baked.pictures.size(); ++i) {
+      const QualityPicture& picture = baked.pictures[i];
       char caption[160];
       std::snprintf(caption, sizeof(caption), "full colour %.1f mm; out up to %.1f mm, in up to %.1f mm", 1000.0 * picture.scale,
                     1000.0 * picture.max_out, 1000.0 * picture.max_in);
       html += "<figure><img alt=\"" + esc(picture.title) + "\" width=\"" + std::to_string(picture.image.width) +
-              "\" height=\"" + std::to_string(picture.image.height) + "\" src=\"" + pngDataUri(picture.image) +
+              "\" height=\"" + std::to_string(picture.image.height) + "\" src=\"" + picture_uris[i] +
               "\"><figcaption><b>" + esc(picture.title) + "</b><br>input | rig | move: " + caption + "</figcaption></figure>\n";
     }
     html += "</div>\n";
@@ -635,7 +638,7 @@ std::string qualitySection(const Report& report) {
 
 }  // namespace
 
-std::string reportHtml(const Report& report) {
+std::string reportHtml(const Report& report, int threads) {
   int failed_errors = 0, failed_warnings = 0, skipped = 0;
   for (const CheckResult& check : report.checks) {
     if (check.status == CheckStatus::kSkipped) ++skipped;
@@ -701,7 +704,10 @@ std::string reportHtml(const Report& report) {
           "file's WEIGHTS_n, over every key of the clip.</p>\n" +
           deformationChart(report) + "</section>\n</div>\n";
 
-  html += qualitySection(report);
+  // The pictures' PNG compression is most of the page's cost: each picture on its own.
+  std::vector<std::string> picture_uris(report.quality.pictures.size());
+  parallelForEach(threads, picture_uris.size(), [&](size_t i) { picture_uris[i] = pngDataUri(report.quality.pictures[i].image); });
+  html += qualitySection(report, picture_uris);
 
   html += "<section id=\"memory\"><h2>Skin data memory</h2>\n<p class=\"explain\">Bytes per vertex of each skin layout "
           "for this character's skinned vertices (pipeline/memory_table.h); the highlighted row is the packed layout "

@@ -12,6 +12,8 @@
 
 namespace rigbake {
 
-std::string reportHtml(const Report& report);
+// The pictures are encoded as PNG on `threads` threads (pipeline/parallel.h); the page is the same at
+// any count.
+std::string reportHtml(const Report& report, int threads = 1);
 
 }  // namespace rigbake
