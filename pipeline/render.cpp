@@ -30,7 +30,18 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
   // Light from the viewer's upper left, a little in front.
   const Eigen::Vector3d light = (-forward + 0.5 * up - 0.4 * right).normalized();
 
-  for (const RenderSurface& surface : surfaces) {
+  // The depth pass keeps each pixel's nearest fragment (the first of equal depths, as drawing in order
+  // with a strict depth test leaves it); only those are shaded afterwards, the same values with no
+  // shading of fragments drawn over later.
+  struct Fragment {
+    int surface = -1;  // -1: background
+    int triangle = 0;
+    double w0 = 0.0, w1 = 0.0, w2 = 0.0;
+  };
+  std::vector<Fragment> nearest(static_cast<size_t>(width) * height);
+  std::vector<std::vector<Eigen::Vector3d>> surface_normals(surfaces.size());
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    const RenderSurface& surface = surfaces[s];
     const std::vector<Eigen::Vector3d>& positions = *surface.positions;
     // Screen coordinates, and area-weighted vertex normals for smooth shading.
     std::vector<Eigen::Vector3d> screen(positions.size());
@@ -38,7 +49,8 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
       const Eigen::Vector3d d = positions[v] - camera.centre;
       screen[v] = {0.5 * width + d.dot(right) * pixels_per_unit, 0.5 * height - d.dot(up) * pixels_per_unit, d.dot(forward)};
     }
-    std::vector<Eigen::Vector3d> normals(positions.size(), Eigen::Vector3d::Zero());
+    std::vector<Eigen::Vector3d>& normals = surface_normals[s];
+    normals.assign(positions.size(), Eigen::Vector3d::Zero());
     for (const auto& t : *surface.triangles) {
       const Eigen::Vector3d n = (positions[t[1]] - positions[t[0]]).cross(positions[t[2]] - positions[t[0]]);
       for (int k = 0; k < 3; ++k) normals[t[k]] += n;
@@ -47,12 +59,15 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
       const double length = n.norm();
       if (length > 0) n /= length;
     }
-    for (const auto& t : *surface.triangles) {
+    const std::vector<std::array<int, 3>>& triangles = *surface.triangles;
+    for (size_t i = 0; i < triangles.size(); ++i) {
+      const auto& t = triangles[i];
       const Eigen::Vector3d& a = screen[t[0]];
       const Eigen::Vector3d& b = screen[t[1]];
       const Eigen::Vector3d& c = screen[t[2]];
       const double area = (b.x() - a.x()) * (c.y() - a.y()) - (c.x() - a.x()) * (b.y() - a.y());
       if (area == 0.0) continue;
+      const bool negative_area = area < 0.0;
       const int x0 = std::max(0, static_cast<int>(std::floor(std::min({a.x(), b.x(), c.x()}))));
       const int x1 = std::min(width - 1, static_cast<int>(std::ceil(std::max({a.x(), b.x(), c.x()}))));
       const int y0 = std::max(0, static_cast<int>(std::floor(std::min({a.y(), b.y(), c.y()}))));
@@ -60,31 +75,45 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
       for (int y = y0; y <= y1; ++y) {
         for (int x = x0; x <= x1; ++x) {
           const double px = x + 0.5, py = y + 0.5;
-          double w0 = ((b.x() - px) * (c.y() - py) - (c.x() - px) * (b.y() - py)) / area;
-          double w1 = ((c.x() - px) * (a.y() - py) - (a.x() - px) * (c.y() - py)) / area;
-          double w2 = 1.0 - w0 - w1;
+          const double e0 = (b.x() - px) * (c.y() - py) - (c.x() - px) * (b.y() - py);
+          const double e1 = (c.x() - px) * (a.y() - py) - (a.x() - px) * (c.y() - py);
+          // e / area < 0 exactly when e is non-zero with the other sign (screen coordinates are far from
+          // where the quotient could underflow): outside, without dividing.
+          if ((e0 != 0.0 && (e0 < 0.0) != negative_area) || (e1 != 0.0 && (e1 < 0.0) != negative_area)) continue;
+          const double w0 = e0 / area;
+          const double w1 = e1 / area;
+          const double w2 = 1.0 - w0 - w1;
           if (w0 < 0 || w1 < 0 || w2 < 0) continue;
           const double z = w0 * a.z() + w1 * b.z() + w2 * c.z();
           const size_t index = static_cast<size_t>(y) * width + x;
           if (!(z < depth[index])) continue;
           depth[index] = z;
-          Eigen::Vector3d normal = (w0 * normals[t[0]] + w1 * normals[t[1]] + w2 * normals[t[2]]).normalized();
-          double facing = 1.0;
-          if (normal.dot(forward) > 0) {  // the side facing away from the viewer: light its inside
-            normal = -normal;
-            facing = 0.7;
-          }
-          const double lambert = 0.25 + 0.75 * std::max(0.0, normal.dot(light));
-          Eigen::Vector3d base(0.82, 0.82, 0.80);
-          if (surface.colours) {
-            const auto& colours = *surface.colours;
-            base = (w0 * colours[t[0]] + w1 * colours[t[1]] + w2 * colours[t[2]]).cast<double>();
-          }
-          const Eigen::Vector3d shaded = (base * lambert * facing).cwiseMin(1.0).cwiseMax(0.0);
-          for (int k = 0; k < 3; ++k) image.pixels[index * 3 + k] = static_cast<std::uint8_t>(std::lround(shaded[k] * 255.0));
+          nearest[index] = {static_cast<int>(s), static_cast<int>(i), w0, w1, w2};
         }
       }
     }
+  }
+  for (size_t index = 0; index < nearest.size(); ++index) {
+    const Fragment& fragment = nearest[index];
+    if (fragment.surface < 0) continue;
+    const RenderSurface& surface = surfaces[static_cast<size_t>(fragment.surface)];
+    const std::vector<Eigen::Vector3d>& normals = surface_normals[static_cast<size_t>(fragment.surface)];
+    const auto& t = (*surface.triangles)[static_cast<size_t>(fragment.triangle)];
+    const double w0 = fragment.w0, w1 = fragment.w1, w2 = fragment.w2;
+    Eigen::Vector3d normal = (w0 * normals[t[0]] + w1 * normals[t[1]] + w2 * normals[t[2]]).normalized();
+    double facing = 1.0;
+    if (normal.dot(forward) > 0) {  // the side facing away from the viewer: light its inside
+      normal = -normal;
+      facing = 0.7;
+    }
+    const double lambert = 0.25 + 0.75 * std::max(0.0, normal.dot(light));
+    Eigen::Vector3d base(0.82, 0.82, 0.80);
+    if (surface.colours) {
+      const auto& colours = *surface.colours;
+      base = (w0 * colours[t[0]] + w1 * colours[t[1]] + w2 * colours[t[2]]).cast<double>();
+    }
+    const Eigen::Vector3d shaded = (base * lambert * facing).cwiseMin(1.0).cwiseMax(0.0);
+    for (int k = 0; k < 3; ++k) image.pixels[index * 3 + k] = static_cast<std::uint8_t>(std::lround(shaded[k] * 255.0));
   }
   return image;
 }
