@@ -16,6 +16,7 @@
 #include "cli/build_job.h"
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "cli/progress.h"
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
 #include "formats/report_junit.h"
@@ -32,6 +33,7 @@ struct BuildCommandOptions {
   bool summary_only = false;
   bool force = false;
   bool json = false;
+  std::string progress = "auto";
   PresetOptions presets;
 };
 
@@ -112,6 +114,16 @@ int run(const BuildCommandOptions& options) {
   std::mutex mutex;
   std::condition_variable changed;
   size_t finished = 0;
+  // On a terminal, one line under the finished characters' lines: how many are done and which run.
+  ProgressLine progress("rigbake build", options.progress);
+  auto showRunning = [&]() {  // with the mutex held
+    std::string running;
+    for (int index : selected)
+      if (state[index] == 1) running += (running.empty() ? "" : ", ") + manifest.characters[index].name;
+    const std::string line = std::to_string(finished) + " of " + std::to_string(selected.size()) + " characters done" +
+                             (running.empty() ? "" : "; building " + running);
+    progress.show(line.c_str());
+  };
   auto next = [&]() -> int {
     for (int index : selected) {
       if (state[index] != 0) continue;
@@ -141,6 +153,7 @@ int run(const BuildCommandOptions& options) {
         if (manifest.characters[s].name == character.muscles_from) source = &outcomes[s];
       }
       bool source_failed = source && source->status == JobStatus::kFailed;
+      showRunning();
       lock.unlock();
       auto start = std::chrono::steady_clock::now();
       JobOutcome outcome = source_failed ? failedJob(character, "muscles_from character '" + character.muscles_from + "' failed")
@@ -150,15 +163,18 @@ int run(const BuildCommandOptions& options) {
       outcomes[index] = outcome;
       state[index] = 2;
       ++finished;
+      progress.clear();
       std::cerr << "[" << finished << "/" << selected.size() << "] " << character.name << ": "
                 << jobStatusName(outcome.status) << std::fixed << std::setprecision(2) << " (" << seconds << " s)"
                 << (outcome.error.empty() ? "" : " " + outcome.error) << "\n";
+      if (finished < selected.size()) showRunning();
       changed.notify_all();
     }
   };
   std::vector<std::thread> threads;
   for (int t = 0; t < std::min<int>(jobs, static_cast<int>(selected.size())); ++t) threads.emplace_back(worker);
   for (std::thread& thread : threads) thread.join();
+  progress.clear();
 
   std::vector<JobOutcome> ordered;
   for (size_t i = 0; i < manifest.characters.size(); ++i) {
@@ -201,6 +217,7 @@ void addBuildCommand(CLI::App& app, Runner* runner) {
   command->add_flag("--force", options->force, "Rebuild even characters whose inputs did not change");
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print each character's status as JSON on stdout");
+  addProgressOption(command, &options->progress);
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
 }
 

@@ -89,12 +89,15 @@ TEST_CASE("cli build: every character gets its outputs and a summary, a broken o
   fs::create_directories(dir / "p");
   std::ofstream(dir / "p/broken.glb", std::ios::binary) << hero_bytes.substr(0, hero_bytes.size() / 3);
   const std::string manifest = writeManifest(dir, "p", nlohmann::json::array({{{"name", "broken"}, {"input", "broken.glb"}}}));
-  test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " -j 2");
+  test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " -j 2 --progress always");
   INFO(run.err);
   CHECK(run.exit_code == 1);
   CHECK(run.err.find("FAILED broken: GLTF_PARSE_FAILED") != std::string::npos);
   CHECK(run.err.find("BUILD_FAILED") != std::string::npos);
-  CHECK(run.err.find("] hero: built") != std::string::npos);  // progress line per character
+  CHECK(run.err.find("] hero: built") != std::string::npos);  // a line per character as it finishes
+  // --progress always: what is done and what runs, as it changes.
+  CHECK(run.err.find("rigbake build: 0 of ") != std::string::npos);
+  CHECK(run.err.find("characters done; building hero") != std::string::npos);
 
   const nlohmann::json summary = summaryOf(dir / "p/out");
   CHECK(statusOf(summary, "hero") == "built");
