@@ -19,6 +19,7 @@
 #include "pipeline/deformation_error.h"
 #include "pipeline/influences.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 
 namespace rigbake {
@@ -381,10 +382,18 @@ CheckResult checkLocatorNearSurface(const ValidationInputs& inputs, const Valida
   if (!inputs.muscles) return skipped(result, "no muscle file given (--muscles)");
   if (!inputs.landmarks) return skipped(result, "landmarks did not resolve, so the body height is unknown");
   const double height = bodyHeightOf(inputs);
+  // Each locator against every body triangle: the locators on the threads, then read in order.
+  const std::vector<NamedLocator>& roles = locatorRoles();
+  const std::vector<MusclePart>& parts = inputs.muscles->parts;
+  std::vector<double> distances(parts.size() * roles.size());
+  parallelForEach(inputs.threads, distances.size(), [&](size_t i) {
+    distances[i] = distanceToBodySurface(*inputs.character, roles[i % roles.size()].get(parts[i / roles.size()]).world);
+  });
   Measurement measurement(&result);
-  for (const MusclePart& part : inputs.muscles->parts) {
-    for (const NamedLocator& role : locatorRoles()) {
-      const double distance = distanceToBodySurface(*inputs.character, role.get(part).world);
+  size_t next = 0;
+  for (const MusclePart& part : parts) {
+    for (const NamedLocator& role : roles) {
+      const double distance = distances[next++];
       if (!std::isfinite(distance)) return skipped(result, "the character has no body mesh");
       measurement.add(distance / height, part.fullName() + "/" + role.role,
                       fixed(distance, 4) + " from the body surface");
