@@ -6,6 +6,9 @@
 // writes the muscles with their fitted curves, as `bake --muscles-out` does; `fitted MUSCLES.json`
 // times a bake with them, read as `bake --muscles` reads them (`--response auto` keeps fitted curves: no
 // fit stage). In one process the re-bake's peak memory was the first bake's, and its heap was warm.
+// `error-only MUSCLES.json` is that re-bake without the volume figures (BakeOptions::measure_quality
+// off): the work issue 14 was filed against, before issue 11 added the response fit and the per-frame
+// volumes of three skinnings; every frame of every clip still gets the deformation error.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -27,19 +30,20 @@ using namespace rigbake;
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [fit|fitted MUSCLES.json]]]\n";
+    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [fit|fitted|error-only MUSCLES.json]]]\n";
     return 1;
   }
   const std::string input = argv[1], output = argv[2], presets = argv[3];
   const int influences = argc > 4 ? std::stoi(argv[4]) : 10;
   const int threads = argc > 5 ? std::stoi(argv[5]) : 0;  // 0: one per core, as bake --threads
   const std::string mode = argc > 6 ? argv[6] : "";
-  if (!mode.empty() && (argc < 8 || (mode != "fit" && mode != "fitted"))) {
-    std::cerr << "rigbake_bench: the sixth argument is 'fit' or 'fitted', followed by a muscle JSON path\n";
+  if (!mode.empty() && (argc < 8 || (mode != "fit" && mode != "fitted" && mode != "error-only"))) {
+    std::cerr << "rigbake_bench: the sixth argument is 'fit', 'fitted' or 'error-only', followed by a muscle JSON path\n";
     return 1;
   }
   const std::string muscles_path = argc > 7 ? argv[7] : "";
-  const bool fitted = mode == "fitted";
+  const bool error_only = mode == "error-only";
+  const bool fitted = mode == "fitted" || error_only;
   auto clock = std::chrono::steady_clock::now();
   auto lap = [&clock]() {
     auto now = std::chrono::steady_clock::now();
@@ -62,6 +66,7 @@ int main(int argc, char** argv) {
     BakeOptions options;
     options.influences = influences;
     options.threads = threads;
+    options.measure_quality = !error_only;
     // The body regions `bake` measures and fits by default (--regions body): without them the bench
     // timed a lighter fit and lighter figures than the CLI runs.
     options.regions = resolveBodyRegions(loaded.character, landmarks, readRegionPreset(presets + "/regions/body.json"));
@@ -88,6 +93,7 @@ int main(int argc, char** argv) {
                                 {"influences", influences},
                                 {"threads", threads},
                                 {"fitted", fitted},
+                                {"volumes", !error_only},
                                 {"load", load},
                                 {"place", place},
                                 {"evaluate", timings.evaluate},
