@@ -437,10 +437,44 @@ void shrinkModelLists(tinygltf::Model* model) {
   model->animations.shrink_to_fit();
 }
 
+// What is wrong with a GLB's container (glTF 2.0, "GLB File Format Specification": a 12-byte header
+// of magic, version and total length, then a JSON chunk and an optional BIN chunk, each an 8-byte
+// header of length and type before its data), or "" when it holds together. tinygltf says only
+// "Invalid glTF binary." for all of these; a cut-off download is the usual cause, so the lengths are
+// named.
+std::string glbContainerProblem(const std::string& bytes) {
+  auto word = [&](size_t at) {
+    uint32_t value = 0;
+    std::memcpy(&value, bytes.data() + at, sizeof(value));
+    return value;
+  };
+  const size_t size = bytes.size();
+  if (size < 12) return "truncated GLB: " + std::to_string(size) + " bytes, shorter than its 12-byte header";
+  if (word(4) != 2) return "GLB version " + std::to_string(word(4)) + " (rigbake reads glTF 2.0, GLB version 2)";
+  const size_t length = word(8);
+  if (length > size)
+    return "truncated GLB: its header gives " + std::to_string(length) + " bytes, the file has " + std::to_string(size);
+  if (length < 20) return "GLB of " + std::to_string(length) + " bytes has no room for its JSON chunk";
+  if (bytes.compare(16, 4, "JSON") != 0) return "the GLB's first chunk is not JSON";
+  const size_t json_end = 20 + static_cast<size_t>(word(12));
+  if (json_end > length)
+    return "truncated GLB: its JSON chunk ends at byte " + std::to_string(json_end) + " of " + std::to_string(length);
+  if (json_end + 8 <= length) {
+    const size_t bin_end = json_end + 8 + static_cast<size_t>(word(json_end));
+    if (bin_end > length)
+      return "truncated GLB: its second chunk ends at byte " + std::to_string(bin_end) + " of " + std::to_string(length);
+  }
+  return "";
+}
+
 }  // namespace
 
 LoadedCharacter loadCharacter(const std::string& path) {
   std::string bytes = readFile(path);
+  if (bytes.compare(0, 4, "glTF") == 0) {
+    const std::string problem = glbContainerProblem(bytes);
+    if (!problem.empty()) fail("GLTF_PARSE_FAILED", path, problem);
+  }
   prepareCompressedGltf(&bytes);
   auto document = std::make_shared<GltfDocument>();
   tinygltf::TinyGLTF loader;

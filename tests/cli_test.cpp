@@ -1,5 +1,10 @@
 // The command line as users meet it: clear one-line errors with stable codes and exit statuses, no
 // output left behind by a failed run, deterministic outputs, and the documented --json contract.
+#include <cstdint>
+#include <cstring>
+#include <utility>
+#include <vector>
+
 #include <nlohmann/json.hpp>
 
 #include "cli_support.h"
@@ -99,6 +104,32 @@ TEST_CASE("cli: bad inputs give one clear line, a stable code, an exit status an
     CliResult r = runCli("place " + (dir / "cut.glb") + " -o " + out);
     expectFailure(r, "GLTF_PARSE_FAILED", 3, out);
     CHECK(r.err.find("cut.glb") != std::string::npos);
+    // The lengths are named, not tinygltf's "Invalid glTF binary.".
+    CHECK(r.err.find("truncated GLB: its header gives " + std::to_string(glb.size()) + " bytes, the file has " +
+                     std::to_string(glb.size() / 2)) != std::string::npos);
+  }
+  SECTION("GLB container: short header, other version, chunk past the end") {
+    const std::string glb = slurp(sampleGlbPathForCli());
+    auto withWord = [](std::string bytes, size_t at, uint32_t value) {
+      std::memcpy(&bytes[at], &value, sizeof(value));
+      return bytes;
+    };
+    uint32_t json_length = 0;
+    std::memcpy(&json_length, glb.data() + 12, sizeof(json_length));
+    const std::vector<std::pair<std::string, std::string>> cases = {
+        {glb.substr(0, 10), "truncated GLB: 10 bytes, shorter than its 12-byte header"},
+        {withWord(glb, 4, 1), "GLB version 1 (rigbake reads glTF 2.0, GLB version 2)"},
+        {withWord(glb, 12, static_cast<uint32_t>(glb.size())),
+         "truncated GLB: its JSON chunk ends at byte " + std::to_string(20 + glb.size()) + " of " + std::to_string(glb.size())},
+        {withWord(glb, 20 + json_length, static_cast<uint32_t>(glb.size())), "truncated GLB: its second chunk ends at byte"},
+    };
+    for (const auto& [bytes, message] : cases) {
+      INFO(message);
+      writeText(dir / "bad.glb", bytes);
+      CliResult r = runCli("bake " + (dir / "bad.glb") + " -o " + (dir / "bad_out.glb"));
+      expectFailure(r, "GLTF_PARSE_FAILED", 3, dir / "bad_out.glb");
+      CHECK(r.err.find("bad.glb: " + message) != std::string::npos);
+    }
   }
   SECTION("glTF without a skin") {
     writeText(dir / "static.gltf", tinyGltf(0));
