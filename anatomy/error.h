@@ -43,4 +43,8 @@ class Error : public std::runtime_error {
 
 [[noreturn]] void fail(const std::string& code, const std::string& where, const std::string& message);
 
+// `text` as one line of valid UTF-8: every byte that is not part of a well-formed UTF-8 sequence, and
+// every ASCII control character (newlines included), written as \xHH. Error messages pass through it.
+std::string printableLine(const std::string& text);
+
 }  // namespace rigbake

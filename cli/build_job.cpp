@@ -206,7 +206,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     }
     return outcome;
   } catch (const std::exception& error) {
-    return failedJob(character, std::string("INTERNAL: ") + error.what());
+    return failedJob(character, printableLine(std::string("INTERNAL: ") + error.what()));
   }
 }
 

@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::cerr << "USAGE: " << e.what() << " (see rigbake --help)\n";
+    std::cerr << rigbake::printableLine(std::string("USAGE: ") + e.what() + " (see rigbake --help)") << "\n";
     return static_cast<int>(rigbake::ExitCode::kUsage);
   }
   try {
@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
     std::cerr << e.what() << "\n";
     return static_cast<int>(e.exitCode());
   } catch (const std::exception& e) {
-    std::cerr << "INTERNAL: " << e.what() << "\n";
+    std::cerr << rigbake::printableLine(std::string("INTERNAL: ") + e.what()) << "\n";
     return static_cast<int>(rigbake::ExitCode::kInternal);
   }
 }

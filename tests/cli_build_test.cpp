@@ -82,6 +82,29 @@ std::vector<std::string> namesBuilt(const std::string& json_out) {
 
 }  // namespace
 
+TEST_CASE("cli build: a character whose file puts invalid UTF-8 into its error fails alone, and the summary is still JSON") {
+  // The JSON parser's message quotes the bytes it read; written raw into summary.json it made the
+  // summary's own JSON writer throw, and the whole build end in INTERNAL (exit 5) with no summary.
+  test::TempDir dir;
+  std::string glb = slurp(test::sampleGlbPathForCli());
+  const size_t at = glb.find("\"asset\"");
+  REQUIRE(at != std::string::npos);
+  glb[at + 1] = '\xA3';
+  fs::create_directories(dir / "p");
+  std::ofstream(dir / "p/garbled.glb", std::ios::binary) << glb;
+  const nlohmann::json manifest = {{"preset", "gow_biped"}, {"influences", 4}, {"out", "out"},
+                                   {"characters", {{{"name", "garbled"}, {"input", "garbled.glb"}}}}};
+  std::ofstream(dir / "p/manifest.json") << manifest.dump(2);
+  test::CliResult run = runCli("build " + ext::shellQuote(dir / "p/manifest.json") + " --json");
+  INFO(run.err);
+  CHECK(run.exit_code == 1);
+  CHECK(run.err.find("INTERNAL") == std::string::npos);
+  const nlohmann::json summary = summaryOf(dir / "p/out");
+  CHECK(statusOf(summary, "garbled") == "failed");
+  CHECK(summary.dump().find("\\\\xA3") != std::string::npos);  // the escape, itself escaped in JSON
+  CHECK(nlohmann::json::parse(run.out).size() == 1);
+}
+
 TEST_CASE("cli build: every character gets its outputs and a summary, a broken one fails the run, not the others") {
   test::TempDir dir;
   // A truncated GLB: the loader must reject it, and the build must go on with the others.

@@ -1,5 +1,6 @@
 // The command line as users meet it: clear one-line errors with stable codes and exit statuses, no
 // output left behind by a failed run, deterministic outputs, and the documented --json contract.
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <utility>
@@ -7,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "anatomy/error.h"
 #include "cli_support.h"
 
 using namespace rigbake::test;
@@ -250,6 +252,35 @@ TEST_CASE("cli: errors lists every code with its exit status") {
     INFO(code);
     CHECK(doc.find("`" + code + "`") != std::string::npos);
   }
+}
+
+TEST_CASE("errors: one printable line of valid UTF-8, whatever bytes the input put into the message") {
+  using rigbake::printableLine;
+  CHECK(printableLine("plain ASCII, kept") == "plain ASCII, kept");
+  // Well-formed UTF-8 stays: two-, three- and four-byte sequences.
+  CHECK(printableLine("R\xC3\xA9sum\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x92\xAA") == "R\xC3\xA9sum\xC3\xA9 \xE2\x82\xAC \xF0\x9F\x92\xAA");
+  // A stray byte, a cut sequence, an overlong form, a surrogate, control characters: escaped.
+  CHECK(printableLine("last read: '\"COLLADA\xA3'") == "last read: '\"COLLADA\\xA3'");
+  CHECK(printableLine("cut \xE2\x82") == "cut \\xE2\\x82");
+  CHECK(printableLine("\xC0\xAF") == "\\xC0\\xAF");
+  CHECK(printableLine("\xED\xA0\x80") == "\\xED\\xA0\\x80");
+  CHECK(printableLine("two\nlines\tand\x7F") == "two\\x0Alines\\x09and\\x7F");
+  const rigbake::Error error("GLTF_PARSE_FAILED", "bad\x85.glb", "read '\xFF'\n");
+  CHECK(std::string(error.what()) == "GLTF_PARSE_FAILED bad\\x85.glb: read '\\xFF'\\x0A");
+  CHECK(error.where() == "bad\\x85.glb");
+  // Through the CLI: the JSON parser quotes the bad byte it read.
+  TempDir dir;
+  std::string glb = slurp(sampleGlbPathForCli());
+  const size_t at = glb.find("\"asset\"");
+  REQUIRE(at != std::string::npos);
+  glb[at + 1] = '\xA3';
+  writeText(dir / "garbled.glb", glb);
+  CliResult r = runCli("landmarks " + (dir / "garbled.glb"));
+  CHECK(r.exit_code == 3);
+  CHECK(r.err.find("GLTF_PARSE_FAILED") == 0);
+  CHECK(r.err.find("\\xA3") != std::string::npos);
+  CHECK(r.err.find('\xA3') == std::string::npos);
+  CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
 
 TEST_CASE("cli: a preset naming an unknown landmark says which and where") {
