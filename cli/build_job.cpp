@@ -12,6 +12,7 @@
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
 #include "formats/gltf_bake.h"
+#include "formats/json_text.h"
 #include "formats/muscle_json.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
@@ -105,7 +106,7 @@ void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobO
                           {"status", jobStatusName(outcome.status)},
                           {"error", outcome.error},
                           {"checks_failed", outcome.checks_failed}};
-  writeFileAtomically(out.stamp, stamp.dump(2) + "\n");
+  writeFileAtomically(out.stamp, jsonText(stamp) + "\n");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "formats/gltf_bake.h"
 #include "formats/gltf_write.h"
 #include "formats/jiggle_json.h"
+#include "formats/json_text.h"
 #include "formats/muscle_json.h"
 #include "formats/packed_file.h"
 #include "formats/preset_json.h"
@@ -173,12 +174,12 @@ int run(const BakeCommandOptions& options) {
   for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
   writeFileAtomically(options.output, file.bytes);
   if (!options.packed_output.empty()) writePackedFile(options.packed_output, packed);
-  if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, stats.dump(2) + "\n");
+  if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, jsonText(stats) + "\n");
   if (!options.muscles_output.empty())
     writeFileAtomically(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
 
   progress.clear();
-  if (options.json) std::cout << stats.dump(2) << "\n";
+  if (options.json) std::cout << jsonText(stats) << "\n";
   std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
             << bake.joints.size() << " joints) into " << options.output << ": " << bake.influences
             << " influences/vertex, " << bake.vertex_count << " vertices, " << bake.clips.size()

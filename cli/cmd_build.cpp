@@ -19,6 +19,7 @@
 #include "cli/progress.h"
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
+#include "formats/json_text.h"
 #include "formats/report_junit.h"
 
 namespace rigbake::cli {
@@ -57,7 +58,7 @@ void writeSummary(const BuildManifest& manifest, const std::vector<JobOutcome>& 
   nlohmann::json summary = {{"manifest", fileNameOf(manifest.file)},
                             {"characters", characters},
                             {"counts", {{"total", outcomes.size()}, {"built", built}, {"up_to_date", up_to_date}, {"failed", failed}}}};
-  writeFileAtomically(manifest.out + "/summary.json", summary.dump(2) + "\n");
+  writeFileAtomically(manifest.out + "/summary.json", jsonText(summary) + "\n");
   writeFileAtomically(manifest.out + "/summary.junit.xml",
                       "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<testsuite name=\"rigbake build\" tests=\"" +
                           std::to_string(outcomes.size()) + "\" failures=\"" + std::to_string(failed) +
@@ -191,7 +192,7 @@ int run(const BuildCommandOptions& options) {
     nlohmann::json result = nlohmann::json::array();
     for (const JobOutcome& outcome : ordered)
       result.push_back({{"name", outcome.name}, {"status", jobStatusName(outcome.status)}, {"error", outcome.error}});
-    std::cout << result.dump(2) << "\n";
+    std::cout << jsonText(result) << "\n";
   }
   if (failures > 0)
     fail("BUILD_FAILED", options.manifest, std::to_string(failures) + " of " + std::to_string(ordered.size()) + " characters failed (listed above and in summary.json)");

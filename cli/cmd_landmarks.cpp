@@ -6,6 +6,7 @@
 
 #include "cli/commands.h"
 #include "cli/common.h"
+#include "formats/json_text.h"
 
 namespace rigbake::cli {
 namespace {
@@ -49,7 +50,7 @@ int run(const LandmarksOptions& options) {
   const LandmarkSet& set = resolved.landmarks;
   const Skeleton& skeleton = resolved.loaded.character.skeleton;
   if (options.json) {
-    std::cout << landmarksJson(fileNameOf(options.character), skeleton, set).dump(2) << "\n";
+    std::cout << jsonText(landmarksJson(fileNameOf(options.character), skeleton, set)) << "\n";
     return 0;
   }
   std::cout << fileNameOf(options.character) << ": map " << set.map_name << ", body height " << std::fixed

@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/atomic_file.h"
+#include "formats/json_text.h"
 #include "formats/muscle_json.h"
 
 namespace rigbake::cli {
@@ -30,12 +31,11 @@ int run(const PlaceOptions& options) {
   muscles.character = fileNameOf(options.character);
   writeFileAtomically(options.output, muscleJson(muscles, character.skeleton, preset.name));
   if (options.json) {
-    std::cout << nlohmann::json{{"character", muscles.character},
-                                {"preset", preset.name},
-                                {"muscle_parts", muscles.parts.size()},
-                                {"body_height", muscles.body_height},
-                                {"output", options.output}}
-                     .dump(2)
+    std::cout << jsonText(nlohmann::json{{"character", muscles.character},
+                                         {"preset", preset.name},
+                                         {"muscle_parts", muscles.parts.size()},
+                                         {"body_height", muscles.body_height},
+                                         {"output", options.output}})
               << "\n";
   } else {
     std::cerr << "placed " << muscles.parts.size() << " muscle parts of " << preset.name << " on " << muscles.character

@@ -7,6 +7,7 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/atomic_file.h"
+#include "formats/json_text.h"
 #include "formats/muscle_json.h"
 
 namespace rigbake::cli {
@@ -48,15 +49,14 @@ int run(const RetargetOptions& options) {
                           {"from_joint", entry.src_joint},
                           {"to_joint", entry.dst_joint}});
     }
-    std::cout << nlohmann::json{{"from", fileNameOf(options.from)},
-                                {"to", moved.character},
-                                {"preset", preset.name},
-                                {"muscle_parts", moved.parts.size()},
-                                {"from_body_height", src.landmarks.body.height},
-                                {"to_body_height", dst.landmarks.body.height},
-                                {"locators", locators},
-                                {"output", options.output}}
-                     .dump(2)
+    std::cout << jsonText(nlohmann::json{{"from", fileNameOf(options.from)},
+                                         {"to", moved.character},
+                                         {"preset", preset.name},
+                                         {"muscle_parts", moved.parts.size()},
+                                         {"from_body_height", src.landmarks.body.height},
+                                         {"to_body_height", dst.landmarks.body.height},
+                                         {"locators", locators},
+                                         {"output", options.output}})
               << "\n";
   } else {
     std::cerr << "retargeted " << moved.parts.size() << " muscle parts from " << fileNameOf(options.from)

@@ -10,6 +10,7 @@
 #include "cli/common.h"
 #include "formats/gltf_clips.h"
 #include "formats/gltf_write.h"
+#include "formats/json_text.h"
 #include "pipeline/rom.h"
 
 namespace rigbake::cli {
@@ -46,7 +47,7 @@ int run(const RomCommandOptions& options) {
                               {"own_clips", character.clips.size()},
                               {"joints_keyed", keyed.size()}};
     summary.update(romJson(rom, character.skeleton));
-    std::cout << summary.dump(2) << "\n";
+    std::cout << jsonText(summary) << "\n";
   }
   std::cerr << "wrote " << options.output << ": " << rom.clips.size() << " ROM clips of " << preset.name << " on "
             << keyed.size() << " joints, after the character's " << character.clips.size() << " own clips\n";

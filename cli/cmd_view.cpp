@@ -15,6 +15,7 @@
 #include "formats/atomic_file.h"
 #include "formats/baked_gltf.h"
 #include "formats/gltf_write.h"
+#include "formats/json_text.h"
 #include "formats/view_page.h"
 
 namespace rigbake::cli {
@@ -86,15 +87,14 @@ int run(const ViewCommandOptions& options) {
   if (options.json) {
     nlohmann::json files_json = nlohmann::json::object();
     for (const auto& [name, bytes] : files) files_json[name] = bytes.size();
-    std::cout << nlohmann::json({{"input", fileNameOf(options.baked)},
-                                 {"output", options.output},
-                                 {"files", files_json},
-                                 {"page_bytes", page_bytes},
-                                 {"clips", loaded.character.clips.size()},
-                                 {"muscles", file.rig.present ? file.rig.names.size() : 0},
-                                 {"rig_extension", file.rig.present},
-                                 {"packed_influences", packed}})
-                     .dump(2)
+    std::cout << jsonText(nlohmann::json({{"input", fileNameOf(options.baked)},
+                                          {"output", options.output},
+                                          {"files", files_json},
+                                          {"page_bytes", page_bytes},
+                                          {"clips", loaded.character.clips.size()},
+                                          {"muscles", file.rig.present ? file.rig.names.size() : 0},
+                                          {"rig_extension", file.rig.present},
+                                          {"packed_influences", packed}}))
               << "\n";
   }
   std::cerr << std::fixed << std::setprecision(1) << "wrote " << (std::filesystem::path(options.output) / kViewPageFile).string()

@@ -8,6 +8,7 @@
 #include "anatomy/error.h"
 #include "anatomy/placement.h"
 #include "formats/json_reader.h"
+#include "formats/json_text.h"
 
 namespace rigbake {
 namespace {
@@ -100,7 +101,7 @@ std::string muscleJson(const MuscleSet& muscles, const Skeleton& skeleton, const
       {"body_height", muscles.body_height},
       {"muscles", parts},
   };
-  return root.dump(2) + "\n";
+  return jsonText(root) + "\n";
 }
 
 MuscleSet readMuscleJson(const std::string& path, const Character& character, const LandmarkSet& landmarks,

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "formats/json_text.h"
 #include "formats/quality_json.h"
 
 namespace rigbake {
@@ -128,6 +129,6 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
   };
 }
 
-std::string reportJson(const Report& report) { return reportJsonValue(report).dump(2) + "\n"; }
+std::string reportJson(const Report& report) { return jsonText(reportJsonValue(report)) + "\n"; }
 
 }  // namespace rigbake

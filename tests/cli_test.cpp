@@ -283,6 +283,25 @@ TEST_CASE("errors: one printable line of valid UTF-8, whatever bytes the input p
   CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
 }
 
+TEST_CASE("cli: a file name that is not UTF-8 is echoed into JSON with U+FFFD, not an INTERNAL error") {
+  // Linux file names are bytes; rigbake echoes them as "input", "output" and "character", and the JSON
+  // writer threw on them after the work was done (exit 5, no stats file).
+  TempDir dir;
+  const std::string input = dir / "hero\xFF.glb";
+  writeText(input, slurp(sampleGlbPathForCli()));
+  CliResult landmarks = runCli("landmarks " + input + " --json");
+  CHECK(landmarks.exit_code == 0);
+  CHECK(nlohmann::json::parse(landmarks.out).is_object());
+  CliResult place = runCli("place " + input + " -o " + (dir / "m\xFF.json") + " --json");
+  REQUIRE(place.exit_code == 0);
+  CHECK(nlohmann::json::parse(place.out)["character"] == "hero\xEF\xBF\xBD.glb");
+  CHECK(nlohmann::json::parse(slurp(dir / "m\xFF.json")).is_object());
+  CliResult bake = runCli("bake " + input + " --response keep -o " + (dir / "out\xFF.glb") + " --stats " + (dir / "stats\xFF.json"));
+  INFO(bake.err);
+  CHECK(bake.exit_code == 0);
+  CHECK(nlohmann::json::parse(slurp(dir / "stats\xFF.json"))["output"] == "out\xEF\xBF\xBD.glb");
+}
+
 TEST_CASE("cli: a preset naming an unknown landmark says which and where") {
   TempDir dir;
   std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");

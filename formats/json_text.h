@@ -1,0 +1,16 @@
+// The JSON text rigbake writes (files and --json output), in one place.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace rigbake {
+
+// `value` indented by 2. A string may hold bytes that are not UTF-8 (a path as the file system spells
+// it, which rigbake echoes as "input"/"output"): such bytes are written as U+FFFD instead of making the
+// writer throw after the work is done, so that a bake of "n\xFF.glb" still gets its stats file.
+inline std::string jsonText(const nlohmann::json& value) {
+  return value.dump(2, ' ', false, nlohmann::json::error_handler_t::replace);
+}
+
+}  // namespace rigbake
