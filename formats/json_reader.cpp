@@ -12,7 +12,8 @@ nlohmann::json readJsonFile(const std::string& path) {
   std::string text = readFile(path);
   try {
     return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // A syntax error (parse_error), or a number too large for a double (out_of_range 406: "1e999").
     // Drop nlohmann's "[json.exception.parse_error.101] " prefix; keep its line and column.
     std::string message = e.what();
     size_t end_of_tag = message.find("] ");

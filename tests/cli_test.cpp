@@ -181,6 +181,13 @@ TEST_CASE("cli: bad inputs give one clear line, a stable code, an exit status an
     CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "broken.json") + " -o " + out);
     expectFailure(r, "JSON_PARSE_FAILED", 3, out);
   }
+  SECTION("JSON with a number no double holds") {
+    // nlohmann reports it as out_of_range, not parse_error: it used to escape as INTERNAL, exit 5.
+    writeText(dir / "huge.json", "{\"muscles\": [1e999]}");
+    CliResult r = runCli("place " + sampleGlbPathForCli() + " --preset " + (dir / "huge.json") + " -o " + out);
+    expectFailure(r, "JSON_PARSE_FAILED", 3, out);
+    CHECK(r.err.find("number overflow parsing '1e999'") != std::string::npos);
+  }
   SECTION("unknown naming map") {
     CliResult r = runCli("landmarks " + sampleGlbPathForCli() + " --map nosuchmap");
     CHECK(r.exit_code == 3);
