@@ -42,9 +42,8 @@ namespace {
 std::string format(const std::string& code, const std::string& where, const std::string& message) {
   return where.empty() ? code + ": " + message : code + " " + where + ": " + message;
 }
+}  // namespace
 
-// The length of the well-formed UTF-8 sequence (RFC 3629: no overlong forms, surrogates or code points
-// past U+10FFFF) that starts at text[i], or 0.
 size_t utf8SequenceAt(const std::string& text, size_t i) {
   const auto byte = [&](size_t k) { return k < text.size() ? static_cast<unsigned char>(text[k]) : 0u; };
   const unsigned lead = byte(i);
@@ -61,7 +60,6 @@ size_t utf8SequenceAt(const std::string& text, size_t i) {
   }
   return 0;
 }
-}  // namespace
 
 std::string printableLine(const std::string& text) {
   static const char kHex[] = "0123456789ABCDEF";

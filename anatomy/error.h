@@ -3,6 +3,7 @@
 // with the code's exit status. Codes are never renamed or reused.
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -42,6 +43,11 @@ class Error : public std::runtime_error {
 };
 
 [[noreturn]] void fail(const std::string& code, const std::string& where, const std::string& message);
+
+// The length of the well-formed UTF-8 sequence (RFC 3629: no overlong forms, surrogates or code points
+// past U+10FFFF) that starts at text[i], or 0. Text rigbake writes passes through it where the input
+// may have put bytes that are not UTF-8 (error lines, JUnit XML).
+size_t utf8SequenceAt(const std::string& text, size_t i);
 
 // `text` as one line of valid UTF-8: every byte that is not part of a well-formed UTF-8 sequence, and
 // every ASCII control character (newlines included), written as \xHH. Error messages pass through it.

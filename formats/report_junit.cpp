@@ -3,12 +3,23 @@
 #include <cmath>
 #include <cstdio>
 
+#include "anatomy/error.h"
+
 namespace rigbake {
 
 std::string xmlEscape(const std::string& text) {
   std::string out;
   out.reserve(text.size());
-  for (unsigned char c : text) {
+  for (size_t i = 0; i < text.size();) {
+    // XML 1.0 allows neither bytes that are not UTF-8 (a file name's, say) nor most control
+    // characters: each becomes U+FFFD, so the report stays well-formed whatever the input was called.
+    const size_t length = utf8SequenceAt(text, i);
+    if (length > 1) {
+      out.append(text, i, length);
+      i += length;
+      continue;
+    }
+    const unsigned char c = static_cast<unsigned char>(text[i++]);
     switch (c) {
       case '&': out += "&amp;"; break;
       case '<': out += "&lt;"; break;
@@ -16,7 +27,7 @@ std::string xmlEscape(const std::string& text) {
       case '"': out += "&quot;"; break;
       case '\'': out += "&apos;"; break;
       default:
-        if (c < 0x20 && c != '\t' && c != '\n' && c != '\r') out += "\xEF\xBF\xBD";
+        if (length == 0 || (c < 0x20 && c != '\t' && c != '\n' && c != '\r')) out += "\xEF\xBF\xBD";
         else out += static_cast<char>(c);
     }
   }

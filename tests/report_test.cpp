@@ -113,11 +113,14 @@ TEST_CASE("report junit: well-formed, one testcase per check, counts that match,
 
 TEST_CASE("report junit: names and messages are escaped") {
   Report report = sampleReport();
-  report.character = "a<b>&\"c'.glb";
+  // A file name is bytes: one that is not UTF-8 (\xFF) must not make the XML ill-formed; valid UTF-8
+  // (\xC3\xA9) stays.
+  report.character = "a<b>&\"c'\xFF\xC3\xA9.glb";
   report.checks[0].status = CheckStatus::kFail;
   report.checks[0].message = "bad </failure> \x01 & more";
   const std::string xml = reportJunit({report});
-  CHECK(xml.find("a&lt;b&gt;&amp;&quot;c&apos;.glb") != std::string::npos);
+  CHECK(xml.find("a&lt;b&gt;&amp;&quot;c&apos;\xEF\xBF\xBD\xC3\xA9.glb") != std::string::npos);
+  CHECK(xml.find('\xFF') == std::string::npos);
   CHECK(xml.find("<b>") == std::string::npos);
   CHECK(xml.find("bad &lt;/failure&gt; \xEF\xBF\xBD &amp; more") != std::string::npos);
   CHECK(xml.find('\x01') == std::string::npos);
