@@ -50,7 +50,11 @@ bool parsesAsXml(const std::string& path) {
 }  // namespace
 
 TEST_CASE("report json: every check with code, severity, threshold, measured value, status and location") {
-  const nlohmann::json json = nlohmann::json::parse(reportJson(failingReport()));
+  const std::string text = reportJson(failingReport());
+  // Fields in the documented order, not sorted: the version and tool first, then the character.
+  CHECK(text.rfind("{\n  \"report_version\": ", 0) == 0);
+  CHECK(text.find("\"tool\"") < text.find("\"character\""));
+  const nlohmann::json json = nlohmann::json::parse(text);
   CHECK(json["report_version"] == kReportJsonVersion);
   CHECK(json["character"] == test::validatedSample().name);
   CHECK(json["passed"] == false);
