@@ -20,6 +20,7 @@
 #include "formats/quality_json.h"
 #include "formats/vrm_spring.h"
 #include "pipeline/bake.h"
+#include "pipeline/leg_coverage.h"
 #include "pipeline/memory_table.h"
 #include "pipeline/rom.h"
 
@@ -161,6 +162,10 @@ int run(const BakeCommandOptions& options) {
   progress.show("writing the files");
   nlohmann::json stats = statsJson(options, character, muscles, bake);
   if (!options.rom.empty()) stats["rom"] = romJson(rom, character.skeleton);
+  const LegCoverage legs = legCoverage(character, resolved.landmarks, muscles);
+  const bool legs_uncovered = legs.legs && !legs.covered && legs.largest_turn_deg > kLegTurnWorthMuscles;
+  stats["legs"] = {{"found", legs.legs}, {"covered_by_muscles", legs.covered}, {"largest_turn_deg", legs.largest_turn_deg},
+                   {"clip", legs.clip}, {"joint", legs.joint}};
 
   // Everything is computed before anything is written, so a failure leaves no output behind.
   const bool vrm_springs = !bake_options.jiggles.empty() && isVrmDocument(*resolved.loaded.document);
@@ -208,6 +213,20 @@ int run(const BakeCommandOptions& options) {
     std::cerr << std::setprecision(2) << "volume in '" << clip.clip << "': input skinning " << std::showpos
               << 100.0 * clip.body.input.change << " %, dual quaternions " << 100.0 * clip.body.dual_quaternion.change
               << " %, rig " << 100.0 * clip.body.rig.change << std::noshowpos << " % (largest change against the bind pose)\n";
+  }
+  if (bake.quality.seam_places > 0) {
+    const ClipQuality* worst = nullptr;
+    for (const ClipQuality& clip : bake.quality.clips)
+      if (!worst || clip.seams.rig - clip.seams.input > worst->seams.rig - worst->seams.input) worst = &clip;
+    std::cerr << std::setprecision(4) << "seams: " << bake.quality.seam_places
+              << " places where skin vertices share a bind position; the rig opens them at most "
+              << std::max(0.0, 1000.0 * (worst->seams.rig - worst->seams.input)) << " mm beyond the input skinning (in '"
+              << worst->clip << "')\n";
+  }
+  if (legs_uncovered) {
+    std::cerr << std::setprecision(0) << "note: " << (options.muscles.empty() ? "preset '" + options.preset + "'" : options.muscles)
+              << " has no muscle across the hips or knees, and clip '" << legs.clip << "' turns " << legs.joint << " by "
+              << legs.largest_turn_deg << " degrees: the legs stay plain skinning (--preset gow_fullbody covers them)\n";
   }
   if (!bake_options.jiggles.empty()) {
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()

@@ -37,7 +37,13 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     muscles[muscle.muscle] = {{"kind", partKindName(muscle.kind)},
                               {"compressed", moveJson(muscle.compressed)},
                               {"stretched", moveJson(muscle.stretched)}};
-  return {{"units", {{"volume", "percent change against the bind pose"}, {"skin_move", "mm along the input skinning's normal, + out"}}},
+  nlohmann::json seam_clips = nlohmann::json::object();
+  for (const ClipQuality& clip : quality.clips)
+    seam_clips[clip.clip] = {{"input_mm", 1000.0 * clip.seams.input}, {"rig_mm", 1000.0 * clip.seams.rig}, {"time_s", clip.seams.time}};
+  return {{"units", {{"volume", "percent change against the bind pose"},
+                     {"skin_move", "mm along the input skinning's normal, + out"},
+                     {"seam", "mm, largest distance between skin vertices that share a bind position"}}},
+          {"seams", {{"places", quality.seam_places}, {"per_clip", seam_clips}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
           {"unmeasured_regions", quality.unmeasured_regions},

@@ -11,6 +11,8 @@
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
+#include "pipeline/seam_opening.h"
+#include "pipeline/seam_rounding.h"
 
 namespace rigbake {
 
@@ -254,15 +256,13 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   // Where each muscle takes weight, and from which joint: its carrier, chosen from those shares.
   reportProgress(options.progress, "weighting the muscles' skin");
   const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height, options.threads);
-  std::vector<SurfaceGraph> surfaces;
-  std::vector<MuscleShares> shares;
-  for (const MeshPart& mesh : character.meshes) {
-    if (!mesh.skinned || mesh.positions.empty()) continue;
-    surfaces.push_back(buildSurfaceGraph(mesh, 1e-6 * std::max(body_height, 1e-3)));
-    shares.push_back(muscleShares(skeleton, mesh, surfaces.back(), muscles, radii, options.weights, options.threads));
-  }
+  // One welded surface over every skinned part, so a border between meshes gets one muscle weight
+  // (pipeline/body_surface.h).
+  BodySurface body = buildBodySurface(character, 1e-6 * std::max(body_height, 1e-3));
+  MuscleShares shares =
+      muscleShares(skeleton, body.skin(character), body.graph, muscles, radii, options.weights, options.threads);
   result.muscles = muscles;
-  chooseCarrierJoints(character, surfaces, shares, &result.muscles);
+  chooseCarrierJoints(character, body, shares, &result.muscles);
   const MuscleSet& rigged = result.muscles;
   // A muscle's skinned joint is skeleton joint (size + m) in the influences below.
   std::vector<int> muscle_joints(muscle_count);
@@ -270,28 +270,26 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   // Full-precision weights with the muscles, per skinned part: they do not depend on the response.
   std::vector<MeasuredPart> measured;
-  {
-    size_t skinned_index = 0;
-    for (size_t p = 0; p < character.meshes.size(); ++p) {
-      const MeshPart& mesh = character.meshes[p];
-      if (!mesh.skinned || mesh.positions.empty()) continue;
-      InfluenceSet base = influencesFromMesh(mesh);
-      if (!checkInfluences(base, skeleton.size()).empty())
-        fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
-      MeasuredPart part;
-      part.mesh_part = static_cast<int>(p);
-      part.input = normalizedInfluences(base, options.threads);
-      part.rig = normalizedInfluences(addMuscleInfluences(part.input, surfaces[skinned_index], shares[skinned_index], rigged,
-                                                muscle_joints, options.weights, options.threads),
-                                      options.threads);
-      ++skinned_index;
-      measured.push_back(std::move(part));
-    }
+  for (size_t s = 0; s < body.mesh_part.size(); ++s) {
+    const MeshPart& mesh = character.meshes[body.mesh_part[s]];
+    InfluenceSet base = influencesFromMesh(mesh);
+    if (!checkInfluences(base, skeleton.size()).empty())
+      fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
+    MeasuredPart part;
+    part.mesh_part = body.mesh_part[s];
+    part.input = normalizedInfluences(base, options.threads);
+    part.rig = normalizedInfluences(addMuscleInfluences(part.input, body.partWelds(s), shares, rigged, muscle_joints,
+                                                        options.weights, options.threads),
+                                    options.threads);
+    measured.push_back(std::move(part));
   }
-  // The surface graphs and weight shares are done with: freed before the fit and the figures, whose
-  // peak they would otherwise add to (2.9 MB at 100k vertices).
-  std::vector<SurfaceGraph>().swap(surfaces);
-  std::vector<MuscleShares>().swap(shares);
+  // Which vertices of the parts share a place, for the rounding below; the rest of the surface and the
+  // weight shares are done with: freed before the fit and the figures, whose peak they would otherwise
+  // add to (2.9 MB at 100k vertices).
+  const std::vector<int> weld_of_vertex = std::move(body.graph.weld_of_vertex);
+  const std::vector<int> first_vertex = std::move(body.first_vertex);
+  body = BodySurface{};
+  shares = MuscleShares{};
   timing.weights += lap();
 
   // The response fit, over poses chosen from every clip's frames where they spread the drivers most.
@@ -415,6 +413,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   for (size_t a = 0; a < measured.size(); ++a)
     motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[measured[a].mesh_part].positions});
   std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
+  shareSeamRoundings(weld_of_vertex, first_vertex, pruned_parts, &quantized_parts);
   {
     size_t next = 0;
     for (std::vector<SkinFrame>& frames : clip_frames) {
@@ -500,7 +499,10 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   reportProgress(options.progress, "measuring every frame");
   DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
                                                     options.measure_quality, error_weights, options.threads);
-  if (options.measure_quality) result.quality = std::move(measures.quality);
+  if (options.measure_quality) {
+    result.quality = std::move(measures.quality);
+    measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result.quality);
+  }
   timing.quality = lap();
   result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);
   if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);

@@ -4,6 +4,8 @@
 // peak compression.
 #include "pipeline/baked_quality.h"
 
+#include "pipeline/seam_opening.h"
+
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -189,6 +191,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   if (character.clips.empty()) addClip(nullptr, 0);
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
+  measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
   out.measured = true;
   if (!options.pictures) return out;
 

@@ -81,6 +81,8 @@ const std::vector<CheckDefinition>& checkDefinitions() {
       // Deformation quality (docs/deformation-quality.md), on the file's own clips and any --rom clips.
       {"SKIN_REGION_VOLUME_LOSS", Severity::kError, 1.0, Comparison::kAtMost, "points of volume",
        "Largest volume a body region loses under the baked rig beyond what the input skinning loses, per clip"},
+      {"SKIN_SEAM_OPEN", Severity::kError, 0.05, Comparison::kAtMost, "mm",
+       "Largest amount by which skin vertices sharing a bind position move apart under the rig beyond the input skinning, per clip"},
       {"SKIN_BODY_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
        "Largest amount by which the rig's whole-body volume change exceeds the input skinning's, per clip"},
       {"MUSCLE_BULGE_OUTWARD", Severity::kWarning, -0.0005, Comparison::kAtLeast, "x body height",
@@ -627,6 +629,23 @@ CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const Validati
   return result;
 }
 
+CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("SKIN_SEAM_OPEN", config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  if (quality.seam_places == 0) return skipped(result, "no two skinned vertices share a bind position");
+  Measurement measurement(&result);
+  for (const ClipQuality& clip : quality.clips) {
+    // What the rig opens beyond the input: where the input itself gives a place two skins, it opens too.
+    measurement.add(1000.0 * std::max(0.0, clip.seams.rig - clip.seams.input), clip.clip,
+                    "input skinning " + fixed(1000.0 * clip.seams.input, 4) + " mm, rig " + fixed(1000.0 * clip.seams.rig, 4) +
+                        " mm at " + fixed(clip.seams.time, 2) + " s");
+  }
+  measurement.finish(std::to_string(quality.seam_places) + " shared places over " + std::to_string(quality.clips.size()) +
+                     " clips, largest opening beyond the input's " + fixed(result.measured, 4) + " mm");
+  return result;
+}
+
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("SKIN_BODY_VOLUME", config);
   if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
@@ -897,6 +916,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkPackedDeformationError(inputs, report.deformation, config));
   report.checks.push_back(checkJiggleWithinClamp(inputs, config));
   report.checks.push_back(checkRegionVolumeLoss(inputs, config));
+  report.checks.push_back(checkSeamOpening(inputs, config));
   report.checks.push_back(checkBodyVolume(inputs, config));
   report.checks.push_back(checkMuscleBulgeOutward(inputs, config));
   report.checks.push_back(checkMuscleStretchNoHollow(inputs, config));

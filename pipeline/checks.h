@@ -286,6 +286,7 @@ CheckResult checkInfluenceCount(const ValidationInputs& inputs, const Validation
 CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const std::vector<ClipDeformation>& per_clip,
                                         const ValidationConfig& config);
 CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config);

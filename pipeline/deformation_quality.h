@@ -51,9 +51,18 @@ struct SkinningVolumes {
   VolumeExtreme input, dual_quaternion, rig;
 };
 
+// Skin vertices that share a bind position, their largest separation over a clip (pipeline/
+// seam_opening.h), in scene units; measured only where DeformationQuality::seam_places > 0.
+struct SeamOpening {
+  double input = 0.0;  // the input's weights, linear blend: 0 wherever the input gave a place one skin
+  double rig = 0.0;    // the weights written, with the muscle joints
+  double time = 0.0;   // when the rig's peaks
+};
+
 struct ClipQuality {
   std::string clip;
   SkinningVolumes body;
+  SeamOpening seams;
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks
 };
@@ -99,6 +108,7 @@ struct DeformationQuality {
   std::vector<std::string> unmeasured_regions;
   std::vector<ClipQuality> clips;
   std::vector<MuscleQuality> muscles;
+  int seam_places = 0;  // places where skinned vertices share a bind position (pipeline/seam_opening.h)
 };
 
 // Frames are measured on `threads` threads (pipeline/parallel.h); the figures are the same at any count.

@@ -235,35 +235,30 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
   return shares;
 }
 
-void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGraph>& surfaces,
-                         const std::vector<MuscleShares>& shares, MuscleSet* muscles) {
+void chooseCarrierJoints(const Character& character, const BodySurface& body, const MuscleShares& shares,
+                         MuscleSet* muscles) {
   const Skeleton& skeleton = character.skeleton;
   const size_t muscle_count = muscles->parts.size();
   const size_t joint_count = static_cast<size_t>(skeleton.size());
-  // mass[m][j]: the weight of joint j under muscle m's share field, summed part by part, vertex by
-  // vertex and slot by slot, over the joints the muscle spans (the order of each sum is the order a
+  // mass[m][j]: the weight of joint j under muscle m's share field, summed vertex by vertex (part after
+  // part) and slot by slot, over the joints the muscle spans (the order of each sum is the order a
   // muscle-by-muscle loop would take).
   std::vector<double> mass(muscle_count * joint_count, 0.0);
   std::vector<char> spans(muscle_count * joint_count, 0);
   for (size_t m = 0; m < muscle_count; ++m)
     for (int joint : spannedJoints(skeleton, muscles->parts[m])) spans[m * joint_count + static_cast<size_t>(joint)] = 1;
-  size_t p = 0;
-  for (const MeshPart& part : character.meshes) {
-    if (!part.skinned || part.positions.empty()) continue;
-    const MuscleShares& share = shares[p];
-    const std::vector<int>& weld = surfaces[p].weld_of_vertex;
-    ++p;
-    const int slots = part.influences_per_vertex;
-    for (size_t v = 0; v < part.positions.size(); ++v) {
-      const int w = weld[v];
-      for (std::uint32_t i = share.first[w]; i < share.first[w + 1]; ++i) {
-        const size_t m = static_cast<size_t>(share.muscle[i]);
-        const double s = share.share[i];
-        if (s <= 0.0 || muscles->parts[m].carrier >= 0) continue;
-        for (int k = 0; k < slots; ++k) {
-          const size_t joint = static_cast<size_t>(part.joints[v * slots + k]);
-          if (spans[m * joint_count + joint]) mass[m * joint_count + joint] += s * part.weights[v * slots + k];
-        }
+  const MeshPart& skin = body.skin(character);
+  const std::vector<int>& weld = body.graph.weld_of_vertex;
+  const int slots = skin.influences_per_vertex;
+  for (size_t v = 0; v < skin.positions.size(); ++v) {
+    const int w = weld[v];
+    for (std::uint32_t i = shares.first[w]; i < shares.first[w + 1]; ++i) {
+      const size_t m = static_cast<size_t>(shares.muscle[i]);
+      const double s = shares.share[i];
+      if (s <= 0.0 || muscles->parts[m].carrier >= 0) continue;
+      for (int k = 0; k < slots; ++k) {
+        const size_t joint = static_cast<size_t>(skin.joints[v * slots + k]);
+        if (spans[m * joint_count + joint]) mass[m * joint_count + joint] += s * skin.weights[v * slots + k];
       }
     }
   }

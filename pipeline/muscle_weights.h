@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "anatomy/muscle_set.h"
+#include "pipeline/body_surface.h"
 #include "pipeline/surface_graph.h"
 #include "pipeline/influences.h"
 
@@ -63,11 +64,10 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
                           int threads = 1);
 
 // Each part's carrier: among the joints it spans, the one whose weight its share field covers most,
-// summed over every skinned mesh part (lowest joint index on a tie). A part whose carrier is already
-// set (part.carrier >= 0) keeps it. surfaces[p] and shares[p] belong to the p-th skinned mesh part
-// with positions.
-void chooseCarrierJoints(const Character& character, const std::vector<SurfaceGraph>& surfaces,
-                         const std::vector<MuscleShares>& shares, MuscleSet* muscles);
+// summed over the whole skinned body (lowest joint index on a tie). A part whose carrier is already
+// set (part.carrier >= 0) keeps it. `shares` are muscleShares() over body.skin(character).
+void chooseCarrierJoints(const Character& character, const BodySurface& body, const MuscleShares& shares,
+                         MuscleSet* muscles);
 
 // `base` are the part's influences; muscle m becomes skeleton joint muscle_joints[m] and takes
 // share * limit of the weight the vertex has on muscle m's carrier joint (limit keeps the muscles on

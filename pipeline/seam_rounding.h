@@ -1,0 +1,25 @@
+// One rounding per place on the skin. The motion-aware rounding (pipeline/quantize_for_motion.h) picks
+// each vertex's 0.001 rounding against its own part's worst vertex, so two vertices of different mesh
+// parts at one place with the same weights could round apart, and the border between the meshes would
+// open by up to a rounding's error (0.15-0.7 mm). Here every such vertex takes the rounding of the
+// first vertex at its place: a valid rounding of its own weights, since they are the same.
+#pragma once
+
+#include <vector>
+
+#include "pipeline/influences.h"
+
+namespace rigbake {
+
+// Pruned rows this close, slot by slot (same joints), count as the same weights: rows built from the
+// same input weights in another slot order differ in the last bits of their sums.
+constexpr double kSameWeightTolerance = 1e-9;
+
+// `weld_of_vertex` numbers the places of every part's vertices, parts one after another (part p's
+// vertices from first_vertex[p]); pruned[p] and (*quantized)[p] are part p's rows, with the same slot
+// count in every part. A vertex whose pruned row equals, within kSameWeightTolerance, that of the first
+// vertex at its place gets that vertex's quantized row.
+void shareSeamRoundings(const std::vector<int>& weld_of_vertex, const std::vector<int>& first_vertex,
+                        const std::vector<InfluenceSet>& pruned, std::vector<QuantizedInfluences>* quantized);
+
+}  // namespace rigbake
