@@ -212,9 +212,23 @@ int run(const BakeCommandOptions& options) {
   for (const ClipQuality& clip : bake.quality.clips) {
     std::cerr << std::setprecision(2) << "volume in '" << clip.clip << "': input skinning " << std::showpos
               << 100.0 * clip.body.input.change << " %, dual quaternions " << 100.0 * clip.body.dual_quaternion.change
-              << " %, rig " << 100.0 * clip.body.rig.change << std::noshowpos << " % (largest change against the bind pose)\n";
+              << " %, rig " << 100.0 * clip.body.rig.change << " %";
+    if (clip.surface.measured) std::cerr << ", centres of rotation " << 100.0 * clip.surface.centre_of_rotation.change << " %";
+    std::cerr << std::noshowpos << " (largest change against the bind pose)\n";
   }
-  if (bake.quality.seam_places > 0) {
+  const ClipQuality* roughest = nullptr;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    if (!clip.surface.measured) continue;
+    auto ratio = [](const ClipQuality& c) { return c.surface.roughness_rise[3] / std::max(c.surface.roughness_rise[0], 1e-5); };
+    if (!roughest || ratio(clip) > ratio(*roughest)) roughest = &clip;
+  }
+  if (roughest) {
+    const double* rise = roughest->surface.roughness_rise;
+    std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
+              << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
+              << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm\n";
+  }
+  if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
     const ClipQuality* worst = nullptr;
     for (const ClipQuality& clip : bake.quality.clips)
       if (!worst || clip.seams.rig - clip.seams.input > worst->seams.rig - worst->seams.input) worst = &clip;

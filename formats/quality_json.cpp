@@ -1,5 +1,7 @@
 #include "formats/quality_json.h"
 
+#include "pipeline/surface_figures.h"
+
 namespace rigbake {
 namespace {
 
@@ -40,10 +42,21 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
   nlohmann::json seam_clips = nlohmann::json::object();
   for (const ClipQuality& clip : quality.clips)
     seam_clips[clip.clip] = {{"input_mm", 1000.0 * clip.seams.input}, {"rig_mm", 1000.0 * clip.seams.rig}, {"time_s", clip.seams.time}};
+  nlohmann::json surface_clips = nlohmann::json::object();
+  for (const ClipQuality& clip : quality.clips) {
+    if (!clip.surface.measured) continue;
+    const double* rise = clip.surface.roughness_rise;
+    surface_clips[clip.clip] = {{"roughness_rise_p95_mm",
+                                 {{"input", 1000.0 * rise[0]}, {"dual_quaternion", 1000.0 * rise[1]},
+                                  {"centre_of_rotation", 1000.0 * rise[2]}, {"rig", 1000.0 * rise[3]}}},
+                                {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)}};
+  }
   return {{"units", {{"volume", "percent change against the bind pose"},
                      {"skin_move", "mm along the input skinning's normal, + out"},
-                     {"seam", "mm, largest distance between skin vertices that share a bind position"}}},
+                     {"seam", "mm, largest distance between skin vertices that share a bind position"},
+                     {"roughness", "mm, 95th percentile over the moving skin of |umbrella Laplacian . normal| posed minus bind"}}},
           {"seams", {{"places", quality.seam_places}, {"per_clip", seam_clips}}},
+          {"surface", {{"samples_per_clip", kSurfaceSamples}, {"per_clip", surface_clips}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
           {"unmeasured_regions", quality.unmeasured_regions},

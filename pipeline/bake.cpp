@@ -13,6 +13,7 @@
 #include "pipeline/quantize_for_motion.h"
 #include "pipeline/seam_opening.h"
 #include "pipeline/seam_rounding.h"
+#include "pipeline/surface_figures.h"
 
 namespace rigbake {
 
@@ -502,6 +503,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   if (options.measure_quality) {
     result.quality = std::move(measures.quality);
     measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result.quality);
+    measureSurfaceFigures(character, measured, clips, skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
+                          &result.quality);
   }
   timing.quality = lap();
   result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);

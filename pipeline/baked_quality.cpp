@@ -5,6 +5,7 @@
 #include "pipeline/baked_quality.h"
 
 #include "pipeline/seam_opening.h"
+#include "pipeline/surface_figures.h"
 
 #include <Eigen/Eigenvalues>
 
@@ -192,6 +193,8 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
   measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
+  measureSurfaceFigures(character, parts, clips, joint_count, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads,
+                        &out.quality);
   out.measured = true;
   if (!options.pictures) return out;
 

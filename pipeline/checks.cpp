@@ -83,6 +83,8 @@ const std::vector<CheckDefinition>& checkDefinitions() {
        "Largest volume a body region loses under the baked rig beyond what the input skinning loses, per clip"},
       {"SKIN_SEAM_OPEN", Severity::kError, 0.05, Comparison::kAtMost, "mm",
        "Largest amount by which skin vertices sharing a bind position move apart under the rig beyond the input skinning, per clip"},
+      {"SKIN_ROUGHNESS_RISE", Severity::kWarning, 1.2, Comparison::kAtMost, "x plain skinning's",
+       "Largest ratio, per clip, of the rig's roughness rise over the bind pose (95th percentile of the moving skin) to the input skinning's"},
       {"SKIN_BODY_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
        "Largest amount by which the rig's whole-body volume change exceeds the input skinning's, per clip"},
       {"MUSCLE_BULGE_OUTWARD", Severity::kWarning, -0.0005, Comparison::kAtLeast, "x body height",
@@ -646,6 +648,31 @@ CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationCon
   return result;
 }
 
+// Below this rise (scene units) a clip's plain skinning is as smooth as its bind pose, and a ratio to
+// it says nothing: the ratio is taken to at least this.
+constexpr double kRoughnessFloor = 1e-5;
+
+CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("SKIN_ROUGHNESS_RISE", config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  Measurement measurement(&result);
+  int measured = 0;
+  for (const ClipQuality& clip : quality.clips) {
+    if (!clip.surface.measured) continue;
+    ++measured;
+    const double* rise = clip.surface.roughness_rise;
+    measurement.add(rise[3] / std::max(rise[0], kRoughnessFloor), clip.clip,
+                    "roughness rise (95th percentile) input " + fixed(1000.0 * rise[0], 3) + " mm, dual quaternions " +
+                        fixed(1000.0 * rise[1], 3) + " mm, centres of rotation " + fixed(1000.0 * rise[2], 3) + " mm, rig " +
+                        fixed(1000.0 * rise[3], 3) + " mm");
+  }
+  if (measured == 0) return skipped(result, "no clip was measured");
+  measurement.finish(std::to_string(measured) + " clips, the rig's roughness rise at most " + fixed(result.measured, 2) +
+                     " x the input skinning's");
+  return result;
+}
+
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("SKIN_BODY_VOLUME", config);
   if (const std::string why = qualitySkip(inputs); !why.empty()) return skipped(result, why);
@@ -917,6 +944,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkJiggleWithinClamp(inputs, config));
   report.checks.push_back(checkRegionVolumeLoss(inputs, config));
   report.checks.push_back(checkSeamOpening(inputs, config));
+  report.checks.push_back(checkRoughnessRise(inputs, config));
   report.checks.push_back(checkBodyVolume(inputs, config));
   report.checks.push_back(checkMuscleBulgeOutward(inputs, config));
   report.checks.push_back(checkMuscleStretchNoHollow(inputs, config));

@@ -287,6 +287,7 @@ CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const st
                                         const ValidationConfig& config);
 CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config);

@@ -59,10 +59,23 @@ struct SeamOpening {
   double time = 0.0;   // when the rig's peaks
 };
 
+// The skin's smoothness and the centre-of-rotation yardstick over a clip (pipeline/surface_figures.h),
+// at up to kSurfaceSamples evenly spaced samples. Skinnings in the order input (linear blend), dual
+// quaternions, centres of rotation, rig.
+constexpr int kSurfaceSkinnings = 4;
+struct SurfaceFigures {
+  bool measured = false;
+  // The 95th percentile, over the skin that moves, of each welded vertex's roughness rise over the bind
+  // pose (|umbrella Laplacian . normal| posed minus bind), scene units; the largest over the samples.
+  double roughness_rise[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
+  VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation
+};
+
 struct ClipQuality {
   std::string clip;
   SkinningVolumes body;
   SeamOpening seams;
+  SurfaceFigures surface;
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks
 };

@@ -1,0 +1,27 @@
+// The skin's smoothness under four skinnings, and the centre-of-rotation yardstick's volume (issue 29:
+// "lumps where the fit pushed volume"). Volume is the one figure the response fit optimises; a fit can
+// keep it by pushing skin out in one place and in at another, which shows as roughness. So for each
+// clip, at up to kSurfaceSamples evenly spaced samples, the skin is posed by plain skinning (the input's
+// weights), dual quaternions, centres of rotation (pipeline/centre_of_rotation.h) and the rig, and
+// each welded vertex's roughness, |L(v) . n(v)| with L the umbrella Laplacian (mean of the one-ring
+// minus the vertex; Taubin 1995) and n the area-weighted normal, is compared with its bind value. The
+// figure is the 95th percentile of that rise over the skin that moves: vertices that blend two joints
+// (each at least 0.05) or carry at least 0.05 of a muscle. docs/deformation-quality.md.
+#pragma once
+
+#include <vector>
+
+#include "anatomy/character.h"
+#include "pipeline/deformation_quality.h"
+
+namespace rigbake {
+
+constexpr int kSurfaceSamples = 12;
+
+// Fills each clip's `surface` in `quality` (clips in the same order). Muscle joints are those at or
+// above `skeleton_joints` in the parts' rig weights. The same figures at any thread count.
+void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
+                           const std::vector<MeasuredClip>& clips, int skeleton_joints, double weld_tolerance, int threads,
+                           DeformationQuality* quality);
+
+}  // namespace rigbake
