@@ -1,7 +1,5 @@
 #include "formats/quality_json.h"
 
-#include "pipeline/surface_figures.h"
-
 namespace rigbake {
 namespace {
 
@@ -56,7 +54,7 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
                      {"seam", "mm, largest distance between skin vertices that share a bind position"},
                      {"roughness", "mm, 95th percentile over the moving skin of |umbrella Laplacian . normal| posed minus bind"}}},
           {"seams", {{"places", quality.seam_places}, {"per_clip", seam_clips}}},
-          {"surface", {{"samples_per_clip", kSurfaceSamples}, {"per_clip", surface_clips}}},
+          {"surface", {{"per_clip", surface_clips}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
           {"unmeasured_regions", quality.unmeasured_regions},

@@ -60,7 +60,7 @@ struct SeamOpening {
 };
 
 // The skin's smoothness and the centre-of-rotation yardstick over a clip (pipeline/surface_figures.h),
-// at up to kSurfaceSamples evenly spaced samples. Skinnings in the order input (linear blend), dual
+// at its most deformed samples (surfaceSamples()). Skinnings in the order input (linear blend), dual
 // quaternions, centres of rotation, rig.
 constexpr int kSurfaceSkinnings = 4;
 struct SurfaceFigures {

@@ -38,6 +38,35 @@ SeamPlaces findSeamPlaces(const Character& character, const std::vector<Measured
 
 namespace {
 
+// A vertex's weights as (joint, weight) pairs, ascending, zero weights left out.
+std::vector<std::pair<int, double>> sortedRow(const InfluenceSet& set, int v) {
+  std::vector<std::pair<int, double>> row;
+  for (int k = 0; k < set.slots_per_vertex; ++k) {
+    const double w = set.weights[static_cast<size_t>(v) * set.slots_per_vertex + k];
+    if (w != 0.0) row.emplace_back(set.joints[static_cast<size_t>(v) * set.slots_per_vertex + k], w);
+  }
+  std::sort(row.begin(), row.end());
+  return row;
+}
+
+// The places whose vertices do not all carry the same weights (joint for joint, to the bit) in the
+// input's or the rig's set: the others move as one under either skinning (apart from a turn of their
+// bind offsets, at most the weld tolerance) and need not be skinned at every sample.
+SeamPlaces placesThatCanOpen(const std::vector<MeasuredPart>& parts, const SeamPlaces& places) {
+  SeamPlaces open;
+  for (const auto& members : places.members) {
+    bool differ = false;
+    for (bool rig : {false, true}) {
+      const auto& [p0, v0] = members[0];
+      const auto first = sortedRow(rig ? parts[p0].rig : parts[p0].input, v0);
+      for (size_t i = 1; i < members.size() && !differ; ++i)
+        differ = sortedRow(rig ? parts[members[i].first].rig : parts[members[i].first].input, members[i].second) != first;
+    }
+    if (differ) open.members.push_back(members);
+  }
+  return open;
+}
+
 Eigen::Vector3d skinVertex(const Eigen::Vector3d& p, const InfluenceSet& set, int v, const SkinFrame& frame) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   for (int k = 0; k < set.slots_per_vertex; ++k) {
@@ -74,13 +103,14 @@ double largestOpening(const std::vector<MeasuredPart>& parts, const Character& c
 std::vector<SeamOpening> measureSeamOpening(const std::vector<MeasuredPart>& parts, const Character& character,
                                             const SeamPlaces& places, const std::vector<MeasuredClip>& clips, int threads) {
   std::vector<SeamOpening> openings(clips.size());
-  if (places.members.empty()) return openings;
+  const SeamPlaces open = placesThatCanOpen(parts, places);
+  if (open.members.empty()) return openings;
   for (size_t c = 0; c < clips.size(); ++c) {
     const std::vector<SkinFrame>& frames = *clips[c].frames;
     std::vector<std::pair<double, double>> per_frame(frames.size());  // (input, rig)
     parallelForEach(threads, frames.size(), [&](size_t t) {
-      per_frame[t] = {largestOpening(parts, character, places, frames[t], false),
-                      largestOpening(parts, character, places, frames[t], true)};
+      per_frame[t] = {largestOpening(parts, character, open, frames[t], false),
+                      largestOpening(parts, character, open, frames[t], true)};
     });
     SeamOpening& opening = openings[c];
     for (size_t t = 0; t < frames.size(); ++t) {

@@ -22,7 +22,9 @@ SeamPlaces findSeamPlaces(const Character& character, const std::vector<Measured
 // Per clip, the largest amount by which two vertices of one place move further apart than they are at
 // the bind pose, over the clip's samples, skinned
 // (linear blend, double precision) with the parts' input weights and with their rig weights; the rig's
-// figure is measured with the muscles' skinned joints of the clip's frames. The same at any thread count.
+// figure is measured with the muscles' skinned joints of the clip's frames. A place whose vertices carry
+// the same weights, joint for joint, in a set opens by nothing in it and is not skinned. The same at
+// any thread count.
 std::vector<SeamOpening> measureSeamOpening(const std::vector<MeasuredPart>& parts, const Character& character,
                                             const SeamPlaces& places, const std::vector<MeasuredClip>& clips, int threads);
 

@@ -21,18 +21,31 @@ struct SurfacePart {
   std::vector<std::vector<int>> ring;  // welded one-rings
   RotationCentres centres;
   std::vector<int> moving;             // welded vertices
-  std::vector<double> bind_roughness;  // per welded vertex
+  // Per moving vertex, the triangles around it (indices into surface.whole.triangles): its normal.
+  std::vector<std::vector<int>> around;
+  std::vector<int> needed;             // part vertices the moving ones' roughness reads (them and their rings)
+  std::vector<double> bind_roughness;  // per moving vertex
 };
 
+// Per moving vertex, |L . n|: L the umbrella Laplacian, n the area-weighted normal of the triangles
+// around it (as vertexNormals() weights them, for these vertices only).
 std::vector<double> roughness(const SurfacePart& part, const std::vector<Eigen::Vector3d>& welded) {
-  const std::vector<Eigen::Vector3d> normals = vertexNormals(part.surface.whole, welded);
-  std::vector<double> out(welded.size(), 0.0);
-  for (size_t w = 0; w < welded.size(); ++w) {
+  std::vector<double> out(part.moving.size(), 0.0);
+  const auto& triangles = part.surface.whole.triangles;
+  for (size_t i = 0; i < part.moving.size(); ++i) {
+    const size_t w = static_cast<size_t>(part.moving[i]);
     if (part.ring[w].empty()) continue;
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+    for (int t : part.around[i]) {
+      const auto& tri = triangles[static_cast<size_t>(t)];
+      normal += (welded[tri[1]] - welded[tri[0]]).cross(welded[tri[2]] - welded[tri[0]]);
+    }
+    const double length = normal.norm();
+    if (!(length > 0.0)) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (int n : part.ring[w]) mean += welded[static_cast<size_t>(n)];
     mean /= static_cast<double>(part.ring[w].size());
-    out[w] = std::abs((mean - welded[w]).dot(normals[w]));
+    out[i] = std::abs((mean - welded[w]).dot(normal / length));
   }
   return out;
 }
@@ -63,6 +76,20 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
       if (weights.rig.joints[v * rig_slots + k] >= skeleton_joints) muscle += weights.rig.weights[v * rig_slots + k];
     if (blended >= 2 || muscle >= kMovingWeight) part.moving.push_back(static_cast<int>(w));
   }
+  std::vector<int> moving_index(welded_count, -1);
+  for (size_t i = 0; i < part.moving.size(); ++i) moving_index[static_cast<size_t>(part.moving[i])] = static_cast<int>(i);
+  part.around.resize(part.moving.size());
+  const auto& triangles = part.surface.whole.triangles;
+  for (size_t t = 0; t < triangles.size(); ++t)
+    for (int corner : triangles[t])
+      if (moving_index[static_cast<size_t>(corner)] >= 0) part.around[static_cast<size_t>(moving_index[static_cast<size_t>(corner)])].push_back(static_cast<int>(t));
+  std::vector<char> read(welded_count, 0);
+  for (int w : part.moving) {
+    read[static_cast<size_t>(w)] = 1;
+    for (int n : part.ring[static_cast<size_t>(w)]) read[static_cast<size_t>(n)] = 1;
+  }
+  for (size_t w = 0; w < welded_count; ++w)
+    if (read[w]) part.needed.push_back(part.surface.vertex_of_weld[w]);
   part.bind_roughness = roughness(part, weldedPositions(part.surface, mesh.positions));
   return part;
 }
@@ -88,13 +115,24 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
   for (size_t p = 0; p < parts.size(); ++p) {
     const std::vector<Eigen::Vector3d>& bind = character.meshes[parts[p].mesh_part].positions;
     const SurfacePart& part = surfaces[p];
-    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {
-        skinLinearBlend(bind, parts[p].input, frame), skinDualQuaternion(bind, parts[p].input, rotations),
-        skinCentreOfRotation(bind, parts[p].input, part.centres, frame, rotations), skinLinearBlend(bind, parts[p].rig, frame)};
+    // Only the vertices the roughness reads are skinned (the rest of each array is left at the bind
+    // pose and never read), but for the centres of rotation, whose volume takes every vertex.
+    std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {bind, bind, {}, bind};
+    std::vector<Eigen::Vector3d> listed;
+    auto scatter = [&](std::vector<Eigen::Vector3d>* into) {
+      for (size_t i = 0; i < part.needed.size(); ++i) (*into)[static_cast<size_t>(part.needed[i])] = listed[i];
+    };
+    skinLinearBlend(bind, parts[p].input, frame, part.needed, &listed);
+    scatter(&posed[0]);
+    skinDualQuaternion(bind, parts[p].input, rotations, part.needed, &listed);
+    scatter(&posed[1]);
+    posed[2] = skinCentreOfRotation(bind, parts[p].input, part.centres, frame, rotations);
+    skinLinearBlend(bind, parts[p].rig, frame, part.needed, &listed);
+    scatter(&posed[3]);
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, posed[s]);
       const std::vector<double> r = roughness(part, welded);
-      for (int w : part.moving) rises[s].push_back(r[w] - part.bind_roughness[w]);
+      for (size_t i = 0; i < r.size(); ++i) rises[s].push_back(r[i] - part.bind_roughness[i]);
       if (s == 2) figures.volume += enclosedVolume(part.surface.whole, welded);
     }
   }
@@ -103,6 +141,22 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
 }
 
 }  // namespace
+
+std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& figures) {
+  const size_t frames = clip.frames->size();
+  std::vector<size_t> picked;
+  if (frames == 0) return picked;
+  auto frameAt = [&](double time) {
+    return static_cast<size_t>(std::lower_bound(clip.times.begin(), clip.times.end(), time) - clip.times.begin());
+  };
+  if (figures.worst_frame >= 0) picked.push_back(static_cast<size_t>(figures.worst_frame));
+  picked.push_back(std::min(frameAt(figures.body.input.time), frames - 1));
+  picked.push_back(std::min(frameAt(figures.body.dual_quaternion.time), frames - 1));
+  picked.push_back(frames - 1);
+  std::sort(picked.begin(), picked.end());
+  picked.erase(std::unique(picked.begin(), picked.end()), picked.end());
+  return picked;
+}
 
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
                            const std::vector<MeasuredClip>& clips, int skeleton_joints, double weld_tolerance, int threads,
@@ -119,9 +173,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
   // Every clip's samples in one list, measured on the threads, then read back in order.
   std::vector<std::pair<size_t, size_t>> samples;  // (clip, frame)
   for (size_t c = 0; c < clips.size(); ++c) {
-    const size_t frames = clips[c].frames->size();
-    const size_t taken = std::min<size_t>(frames, kSurfaceSamples);
-    for (size_t i = 0; i < taken; ++i) samples.emplace_back(c, taken == 1 ? frames - 1 : i * (frames - 1) / (taken - 1));
+    for (size_t t : surfaceSamples(clips[c], quality->clips[c])) samples.emplace_back(c, t);
   }
   std::vector<SampleFigures> figures(samples.size());
   parallelForEach(threads, samples.size(), [&](size_t i) {

@@ -1,7 +1,7 @@
 // The skin's smoothness under four skinnings, and the centre-of-rotation yardstick's volume (issue 29:
 // "lumps where the fit pushed volume"). Volume is the one figure the response fit optimises; a fit can
 // keep it by pushing skin out in one place and in at another, which shows as roughness. So for each
-// clip, at up to kSurfaceSamples evenly spaced samples, the skin is posed by plain skinning (the input's
+// clip, at its most deformed samples (surfaceSamples()), the skin is posed by plain skinning (the input's
 // weights), dual quaternions, centres of rotation (pipeline/centre_of_rotation.h) and the rig, and
 // each welded vertex's roughness, |L(v) . n(v)| with L the umbrella Laplacian (mean of the one-ring
 // minus the vertex; Taubin 1995) and n the area-weighted normal, is compared with its bind value. The
@@ -16,7 +16,11 @@
 
 namespace rigbake {
 
-constexpr int kSurfaceSamples = 12;
+// A clip's samples the figures are taken at, ascending: where the rig's, the input skinning's and dual
+// quaternions' whole-body volume change peak (`figures`, measured on every sample), and the last. Every
+// sample would cost four skinnings each: on Quaternius Cyberpunk (22 clips, 559 samples) that was five
+// times the rest of the bake.
+std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& figures);
 
 // Fills each clip's `surface` in `quality` (clips in the same order). Muscle joints are those at or
 // above `skeleton_joints` in the parts' rig weights. The same figures at any thread count.
