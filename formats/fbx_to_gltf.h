@@ -20,7 +20,7 @@ struct FbxConversion {
   std::vector<std::string> notes;
 };
 
-// Reads `path` (binary FBX 6.1/7.x or ASCII FBX) and fills `model` with a glTF 2.0 scene in metres, +Y
+// Reads `path` (FBX 7.x, binary or ASCII) and fills `model` with a glTF 2.0 scene in metres, +Y
 // up: one node per FBX node (names made unique), skinned meshes with their inverse bind matrices,
 // JOINTS_n/WEIGHTS_n (normalised, 4 per set), clips in seconds, one material per FBX material (its
 // diffuse colour). See docs/fbx.md. Throws Error IO_FILE_NOT_FOUND or FBX_PARSE_FAILED.
