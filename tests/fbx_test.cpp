@@ -6,6 +6,7 @@
 
 #include <cstring>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <set>
 
 #include "anatomy/error.h"
@@ -291,5 +292,45 @@ bpy.ops.export_scene.gltf(filepath=target, export_format="GLB", export_animation
       ++compared;
     }
     CHECK(compared >= 24);
+  }
+}
+
+TEST_CASE("FBX cli build: a manifest of the three FBX characters, a GLB and a VRM builds, valid, with volume figures per clip") {
+  const std::string male = test::requireAsset("fbx/Male_Casual.fbx");
+  const std::string female = test::requireAsset("fbx/Female_Casual.fbx");
+  const std::string cowboy = test::requireAsset("fbx/Cowboy.fbx");
+  if (male.empty() || female.empty() || cowboy.empty()) return;
+  test::TempDir dir;
+  REQUIRE(test::runCli("sample -o " + (dir / "sample.glb")).exit_code == 0);
+  REQUIRE(test::runCli("sample --vrm 1 -o " + (dir / "sample.vrm")).exit_code == 0);
+  // The Cowboy gets the Male's muscles by retargeting, FBX to FBX.
+  const nlohmann::json characters = nlohmann::json::array(
+      {{{"name", "male"}, {"input", male}},
+       {{"name", "female"}, {"input", female}},
+       {{"name", "cowboy"}, {"input", cowboy}, {"muscles_from", "male"}},
+       {{"name", "sample"}, {"input", "sample.glb"}},
+       {{"name", "avatar"}, {"input", "sample.vrm"}}});
+  std::ofstream(dir / "manifest.json") << nlohmann::json{{"influences", 4}, {"out", "out"}, {"characters", characters}}.dump(2);
+  test::CliResult run = test::runCli("build " + (dir / "manifest.json") + " -j 1 --progress never");
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json summary = nlohmann::json::parse(test::slurp(dir / "out/summary.json"));
+  CHECK(summary["counts"]["built"] == 5);
+  const std::map<std::string, int> clips = {{"male", 11}, {"female", 11}, {"cowboy", 20}, {"sample", 3}, {"avatar", 3}};
+  const bool validator = ext::requireTool(ext::validatorAvailable(), ext::validatorHint());
+  for (const auto& [name, count] : clips) {
+    INFO(name);
+    const nlohmann::json report = nlohmann::json::parse(test::slurp(dir / ("out/" + name + "/report.json")));
+    const nlohmann::json& per_clip = report["deformation_quality"]["body"]["per_clip"];
+    CHECK(static_cast<int>(per_clip.size()) == count);
+    for (const auto& [clip, figures] : per_clip.items()) {
+      INFO(clip);
+      CHECK(figures["input"]["change_percent"].is_number());
+      CHECK(figures["rig"]["change_percent"].is_number());
+    }
+    if (!validator) continue;
+    ext::ValidationSummary khronos = ext::validateWithKhronos(dir / ("out/" + name + "/" + name + ".glb"));
+    INFO(khronos.raw);
+    CHECK(khronos.errors == 0);
   }
 }
