@@ -14,6 +14,7 @@
 #include "cli_support.h"
 #include "external_tools.h"
 #include "formats/fbx_to_gltf.h"
+#include "pipeline/pose.h"
 
 using namespace rigbake;
 namespace ext = rigbake::test::external;
@@ -333,4 +334,66 @@ TEST_CASE("FBX cli build: a manifest of the three FBX characters, a GLB and a VR
     INFO(khronos.raw);
     CHECK(khronos.errors == 0);
   }
+}
+
+TEST_CASE("FBX clips play as Blender's glTF export of the same clip plays (Blender)") {
+  if (!ext::requireTool(ext::onPath("blender"), "blender (Debian package blender)")) return;
+  const std::string path = test::requireAsset("fbx/Male_Casual.fbx");
+  if (path.empty()) return;
+  test::TempDir dir;
+  const std::string clip_name = "HumanArmature|Man_Walk";  // Blender's action: HumanArmature|HumanArmature|Man_Walk
+  std::ofstream(dir / "export.py") << R"PY(import sys
+import numpy
+for name, alias in (("bool", bool), ("int", int), ("float", float), ("object", object)):
+    if name not in numpy.__dict__:
+        setattr(numpy, name, alias)
+import bpy
+source, action, target = sys.argv[sys.argv.index("--") + 1:]
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.import_scene.fbx(filepath=source)
+# Blender names an imported action "<armature>|<FBX stack name>".
+chosen = [a for a in bpy.data.actions if a.name.endswith("|" + action)]
+assert len(chosen) == 1, [a.name for a in bpy.data.actions]
+for o in bpy.data.objects:
+    if o.type == "ARMATURE":
+        o.animation_data.action = chosen[0]
+bpy.ops.export_scene.gltf(filepath=target, export_format="GLB", export_animations=True)
+)PY";
+  ext::CommandResult run = ext::runCommand("blender --background --factory-startup --python-exit-code 1 --python " +
+                                           ext::shellQuote(dir / "export.py") + " -- " + ext::shellQuote(path) + " " +
+                                           ext::shellQuote("Man_Walk") + " " + ext::shellQuote(dir / "walk.glb") + " 2>&1");
+  INFO(run.output.substr(0, 3000));
+  REQUIRE(run.exit_code == 0);
+  const Character fbx = loadCharacter(path).character;
+  const Character gltf = loadCharacter(dir / "walk.glb").character;
+  const Clip* ours = nullptr;
+  for (const Clip& clip : fbx.clips) ours = clip.name == clip_name ? &clip : ours;
+  REQUIRE(ours);
+  const Clip* theirs = nullptr;
+  for (const Clip& clip : gltf.clips) theirs = clip.name == "HumanArmature|" + clip_name ? &clip : theirs;
+  REQUIRE(theirs);
+  // Blender imports FBX time 0 as frame 1, which its glTF exporter writes at 1/24 s.
+  const double shift = 1.0 / 24.0;
+  CHECK(theirs->duration == Approx(ours->duration + shift).margin(1e-4));
+  double worst = 0.0;
+  std::string worst_at;
+  int compared = 0;
+  for (int frame = 0; frame * (1.0 / 24.0) <= ours->duration + 1e-9; ++frame) {
+    const double time = frame / 24.0;
+    const Pose a = sampleClip(fbx.skeleton, *ours, time);
+    const Pose b = sampleClip(gltf.skeleton, *theirs, time + shift);
+    for (int j = 0; j < fbx.skeleton.size(); ++j) {
+      const int k = gltf.skeleton.find(fbx.skeleton.names[j]);
+      if (k < 0) continue;
+      const double distance = (a.world[j].translation() - b.world[k].translation()).norm();
+      if (distance > worst) {
+        worst = distance;
+        worst_at = fbx.skeleton.names[j] + " at " + std::to_string(time) + " s";
+      }
+      ++compared;
+    }
+  }
+  INFO("worst joint distance " << worst << " m (" << worst_at << ") over " << compared << " joint samples");
+  CHECK(compared >= 26 * 31 / 2);
+  CHECK(worst < 0.001);
 }
