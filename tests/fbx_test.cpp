@@ -440,3 +440,35 @@ TEST_CASE("FBX: converted skin weights hold glTF's invariants on every vertex of
     CHECK(more_than_four > 0);
   }
 }
+
+TEST_CASE("FBX: an ASCII FBX from Assimp's exporter loads, and its mesh of lines is left out with a note") {
+  // tests/data/make_blade_and_wire.cpp wrote it: a triangle skinned to Root and Tip (50 cm above),
+  // and `Wire`, two lines. Assimp 5.2's exporter stores the clip's 12 ticks as 12 s, which is what the
+  // file then says.
+  const std::string path = test::sourceDir() + "/tests/data/blade_and_wire_ascii.fbx";
+  LoadedCharacter loaded = loadCharacter(path);
+  REQUIRE(loaded.notes.size() == 1);
+  CHECK(loaded.notes[0] == "mesh 'Wire' on node 'Wire' has no triangles (lines or points only): left out");
+  const Character& character = loaded.character;
+  REQUIRE(character.meshes.size() == 1);
+  CHECK(character.meshes[0].name == "Blade");
+  CHECK(character.meshes[0].triangles.size() == 1);
+  REQUIRE(character.skeleton.size() == 2);
+  CHECK(character.skeleton.names == std::vector<std::string>{"Root", "Tip"});
+  CHECK((character.skeleton.bindPosition(1) - Eigen::Vector3d(0.0, 0.5, 0.0)).norm() < 1e-6);
+  CHECK((character.meshes[0].positions[2] - Eigen::Vector3d(0.0, 1.0, 0.0)).norm() < 1e-6);
+  // Vertex 2 has only Tip, at 0.75: normalised to 1. Vertex 1's zero weight on Tip is dropped.
+  const MeshPart& blade = character.meshes[0];
+  CHECK(blade.joints[2 * blade.influences_per_vertex] == 1);
+  CHECK(blade.weights[2 * blade.influences_per_vertex] == Approx(1.0));
+  CHECK(blade.joints[1 * blade.influences_per_vertex] == 0);
+  CHECK(blade.weights[1 * blade.influences_per_vertex + 1] == 0.0);
+  REQUIRE(character.clips.size() == 1);
+  CHECK(character.clips[0].name == "Bend");
+  CHECK(character.clips[0].duration == Approx(12.0));
+  // The CLI prints the note before whatever comes next (here: no humanoid to find landmarks on).
+  test::CliResult r = test::runCli("landmarks " + ext::shellQuote(path));
+  CHECK(r.exit_code == 3);
+  CHECK(r.err.rfind("note " + path + ": mesh 'Wire' on node 'Wire' has no triangles (lines or points only): left out\n", 0) == 0);
+  CHECK(r.err.find("\nLANDMARK_UNRESOLVED ") != std::string::npos);
+}
