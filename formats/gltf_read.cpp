@@ -468,10 +468,6 @@ std::string glbContainerProblem(const std::string& bytes) {
   return "";
 }
 
-}  // namespace
-
-namespace {
-
 // The Character of a model, whether a glTF file held it or formats/fbx_to_gltf.cpp built it.
 LoadedCharacter characterOf(std::shared_ptr<GltfDocument> document, const std::string& path) {
   const tinygltf::Model& model = document->model;
@@ -498,6 +494,7 @@ LoadedCharacter loadCharacter(const std::string& path) {
   if (isFbxPath(path)) {
     auto document = std::make_shared<GltfDocument>();
     FbxConversion conversion = convertFbxToGltf(path, &document->model);
+    shrinkModelLists(&document->model);
     LoadedCharacter loaded = characterOf(std::move(document), path);
     loaded.notes = std::move(conversion.notes);
     return loaded;
