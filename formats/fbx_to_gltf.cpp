@@ -271,7 +271,7 @@ struct Influence {
 };
 
 // Per kept vertex, its influences by weight (heaviest first, then by slot), normalised to sum 1.
-// A vertex no bone weights is bound to the skin's first joint.
+// A vertex that no bone weights is bound to the skin's first joint.
 std::vector<std::vector<Influence>> vertexInfluences(const PrimitiveSource& source, const std::vector<int>& kept_index,
                                                      size_t kept, int* unweighted) {
   std::vector<std::vector<Influence>> influences(kept);
