@@ -268,7 +268,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       "RIGBAKE_muscle_rig extension, adding no animation data (docs/runtime.md). Reports the weights' deformation "
       "error in mm and the volume per clip against plain and dual-quaternion skinning (--stats for every body "
       "region).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
-  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
+  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
   command->add_option("--muscles", options->muscles,
                       "Muscle JSON from `rigbake place` (default: place --preset on the character now)");

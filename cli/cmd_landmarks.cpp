@@ -83,7 +83,7 @@ void addLandmarksCommand(CLI::App& app, Runner* runner) {
       "clavicle, acromion, scapula, upper_arm(_twist), forearm(_twist), hand, and the optional upper_leg, lower_leg, "
       "foot, toe) with the joint each came from or the formula that derived it. Positions are world space at bind "
       "pose, in metres.");
-  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
+  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print machine-readable JSON (docs/output-contract.md)");
   command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });

@@ -53,7 +53,7 @@ void addPlaceCommand(CLI::App& app, Runner* runner) {
       "Place the muscle locators of an anatomy preset (origin, insertion and driver of every muscle part) on the left "
       "side and mirror them to the right across the body's sagittal plane. Writes muscle JSON in the talk's export "
       "shape plus attach joints and factors (docs/muscle-json.md). Units: metres.");
-  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
+  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Muscle JSON to write")->required();
   command->add_option("--preset", options->preset, "Muscle preset: a file, or a name under presets/muscles/")
       ->capture_default_str();

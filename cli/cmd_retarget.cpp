@@ -80,9 +80,9 @@ void addRetargetCommand(CLI::App& app, Runner* runner) {
       "(whose attach joints then come from --preset). Writes muscle JSON for DST (docs/muscle-json.md); method and "
       "measured accuracy in docs/retarget.md.");
   command->add_option("muscles", options->muscles, "Muscle JSON made for --from")->required();
-  command->add_option("--from", options->from, "Character the muscle file was made for (.glb, .gltf, .vrm)")
+  command->add_option("--from", options->from, "Character the muscle file was made for (.glb, .gltf, .vrm, .fbx)")
       ->required();
-  command->add_option("--to", options->to, "Character to move the muscles onto (.glb, .gltf, .vrm)")->required();
+  command->add_option("--to", options->to, "Character to move the muscles onto (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Muscle JSON to write for --to")->required();
   command->add_option("--preset", options->preset,
                       "Muscle preset giving each part's attach landmarks and placement rule: a file, or a name under presets/muscles/")

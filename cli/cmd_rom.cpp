@@ -72,7 +72,7 @@ void addRomCommand(CLI::App& app, Runner* runner) {
       "named. They are written as ordinary LINEAR rotation animations named rom_*, after the character's own, which "
       "stay untouched. To measure skinning on them without writing them, use `rigbake bake --rom` or "
       "`rigbake validate --rom`.\n\nExample: rigbake rom hero.glb -o hero_rom.glb --clips elbow_flexion,knee_flexion");
-  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm)")->required();
+  command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output,
                       "glTF to write: the character plus the ROM clips (.glb/.vrm binary, .gltf JSON)")
       ->required();

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iostream>
 
 #include "anatomy/error.h"
 #include "formats/preset_json.h"
@@ -120,6 +121,8 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   }
   ResolvedCharacter resolved;
   resolved.loaded = loadCharacter(path);
+  // What an FBX conversion left out (formats/fbx_to_gltf.h); a glTF input has no notes.
+  for (const std::string& note : resolved.loaded.notes) std::cerr << printableLine("note " + path + ": " + note) << "\n";
   resolved.landmarks = resolveLandmarks(resolved.loaded.character, inputs);
   return resolved;
 }

@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "anatomy/character.h"
 
@@ -19,9 +20,13 @@ struct GltfDocument;  // wraps tinygltf::Model; defined in formats/gltf_read.cpp
 struct LoadedCharacter {
   Character character;
   std::shared_ptr<GltfDocument> document;
+  // What loading left out, one sentence each, for the CLI to print (an FBX mesh of lines); empty for glTF.
+  std::vector<std::string> notes;
 };
 
-// Reads .glb, .gltf (external or embedded buffers) and .vrm (0.x and 1.0). Throws Error with
+// Reads .glb, .gltf (external or embedded buffers) and .vrm (0.x and 1.0), and .fbx (any case) through
+// formats/fbx_to_gltf.h: the document is then the glTF model converted from it. Throws Error with
+// FBX_PARSE_FAILED for an FBX that Assimp cannot read, otherwise with
 // IO_FILE_NOT_FOUND, GLTF_PARSE_FAILED, GLTF_EXTENSION_UNSUPPORTED (extensionsRequired names an
 // extension formats/gltf_extensions.h does not list), GLTF_NO_SKIN, GLTF_SKIN_INVALID or
 // GLTF_ACCESSOR_INVALID.

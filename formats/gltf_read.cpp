@@ -19,6 +19,7 @@
 #include "formats/gltf_decompress.h"
 #include "formats/gltf_document.h"
 #include "formats/gltf_extensions.h"
+#include "formats/fbx_to_gltf.h"
 
 namespace rigbake {
 
@@ -467,9 +468,37 @@ std::string glbContainerProblem(const std::string& bytes) {
   return "";
 }
 
+// The Character of a model, whether a glTF file held it or formats/fbx_to_gltf.cpp built it.
+LoadedCharacter characterOf(std::shared_ptr<GltfDocument> document, const std::string& path) {
+  const tinygltf::Model& model = document->model;
+  if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
+
+  NodeTree tree = buildNodeTree(model, path);
+  std::vector<int> joint_of_node;
+  std::vector<Eigen::Affine3d> skin_placement;
+  LoadedCharacter loaded;
+  Character& character = loaded.character;
+  character.source = path;
+  character.skeleton = buildSkeleton(model, tree, path, &joint_of_node, &skin_placement);
+  readMeshes(model, tree, character.skeleton, joint_of_node, skin_placement, path, &character);
+  character.skin_placement = skin_placement;
+  readClips(model, joint_of_node, path, &character);
+  readVrmHumanoid(model, joint_of_node, &character);
+  loaded.document = std::move(document);
+  return loaded;
+}
+
 }  // namespace
 
 LoadedCharacter loadCharacter(const std::string& path) {
+  if (isFbxPath(path)) {
+    auto document = std::make_shared<GltfDocument>();
+    FbxConversion conversion = convertFbxToGltf(path, &document->model);
+    shrinkModelLists(&document->model);
+    LoadedCharacter loaded = characterOf(std::move(document), path);
+    loaded.notes = std::move(conversion.notes);
+    return loaded;
+  }
   std::string bytes = readFile(path);
   if (bytes.compare(0, 4, "glTF") == 0) {
     const std::string problem = glbContainerProblem(bytes);
@@ -499,22 +528,7 @@ LoadedCharacter loadCharacter(const std::string& path) {
   requireHonouredExtensions(document->model.extensionsRequired, path);
   decompressGltf(&document->model, path);
   shrinkModelLists(&document->model);
-  const tinygltf::Model& model = document->model;
-  if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
-
-  NodeTree tree = buildNodeTree(model, path);
-  std::vector<int> joint_of_node;
-  std::vector<Eigen::Affine3d> skin_placement;
-  LoadedCharacter loaded;
-  Character& character = loaded.character;
-  character.source = path;
-  character.skeleton = buildSkeleton(model, tree, path, &joint_of_node, &skin_placement);
-  readMeshes(model, tree, character.skeleton, joint_of_node, skin_placement, path, &character);
-  character.skin_placement = skin_placement;
-  readClips(model, joint_of_node, path, &character);
-  readVrmHumanoid(model, joint_of_node, &character);
-  loaded.document = std::move(document);
-  return loaded;
+  return characterOf(std::move(document), path);
 }
 
 }  // namespace rigbake
