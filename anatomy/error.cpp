@@ -33,6 +33,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VIEW_PLAYER_MISSING", ExitCode::kIo, "rigbake view cannot find the bundled player script (scripts/install-player.sh builds it)."},
       {"VIEW_NOT_BAKED", ExitCode::kInvalidInput, "rigbake view was given a file that is not a rigbake bake (no rig extension, muscle joints or packed influences)."},
       {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
+      {"VIEW_RIG_STRIPPED", ExitCode::kInvalidInput, "A baked file's muscle joints have neither the RIGBAKE_muscle_rig extension nor channels: a tool stripped the rig, so the player would show muscles that never move."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;
