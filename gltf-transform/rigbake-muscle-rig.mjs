@@ -131,8 +131,8 @@ export function defineRigbakeMuscleRig(core) {
         const index = node ? context.nodeIndexMap.get(node) : undefined;
         if (index === undefined) {
           throw new Error(
-            `${RIGBAKE_MUSCLE_RIG}: the node of ${key} of ${describePlace(rigDef, key)} was removed by a ` +
-              'transform; the rig would name the wrong joint, so nothing is written',
+            `${RIGBAKE_MUSCLE_RIG}: ${describePlace(rigDef, key)} ${key.split('/').slice(2).join('/')}: its node ` +
+              'was removed by a transform; the rig would name the wrong joint, so nothing is written',
           );
         }
         owner[field] = index;

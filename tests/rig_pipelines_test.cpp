@@ -255,7 +255,8 @@ TEST_CASE("rig pipelines: glTF-Transform optimize with rigbake's config keeps th
   struct Input {
     std::string path, flags;
   };
-  std::vector<Input> inputs = {{sampleGlbPathForCli(), ""}};
+  // The mannequin with helper joints and jiggles, so that every kind of node reference is carried.
+  std::vector<Input> inputs = {{sampleGlbPathForCli(), "--helper-joints --jiggle biceps"}};
   // CesiumMan with the preset the README's figures use (gow_biped leaves its abdomen over the volume check).
   if (const std::string cesium = requireAsset("CesiumMan.glb"); !cesium.empty()) inputs.push_back({cesium, "--preset gow_fullbody"});
   for (size_t i = 0; i < inputs.size(); ++i) {
