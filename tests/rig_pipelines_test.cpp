@@ -5,9 +5,11 @@
 //   drops the extension, and its optimize also quantizes the weights to 8 bits: `rigbake validate`
 //   fails each with a one-line reason (RIG_EXTENSION_MISSING, INFLUENCES_TRUNCATED);
 // - glTF-Transform with rigbake's config (gltf-transform/rigbake.config.mjs) keeps the extension with
-//   node references that name the same joints, every influence, and muscles that evaluate (the C++
-//   runtime rig, pipeline/muscle_joint.h evaluateRig) within 1e-4 m of the unoptimized file's at every
-//   frame of every clip; `rigbake validate` passes the optimized file.
+//   node references that name the same joints and every influence; its rig evaluates (the C++ runtime
+//   rig, pipeline/muscle_joint.h evaluateRig) exactly like the bake's on the same joints, and, when
+//   optimize leaves the animation exact (--resample false --meshopt-level medium), within 1e-4 m of the
+//   bake's at every frame of every clip; `rigbake validate` passes the optimized files. optimize's
+//   defaults compress the animation lossily; the test prints what that costs (docs/pipelines.md).
 // Under CI=true a missing tool fails the test instead of skipping it.
 #include <algorithm>
 #include <cstdio>
@@ -124,22 +126,31 @@ std::map<std::string, std::string> rigNodeNames(const std::string& path) {
   return names;
 }
 
+struct MatrixDifference {
+  double translation = 0.0;  // m
+  double linear = 0.0;       // the 3x3 part (rotation times the response's scale), unitless
+  bool operator>(const MatrixDifference& other) const {
+    return std::max(translation, linear) > std::max(other.translation, other.linear);
+  }
+};
+
 struct RigDeviation {
-  double end_to_end = 0.0;  // each file's rig on its own clips: largest muscle matrix entry difference (m)
-  double rig_only = 0.0;    // both rigs on the optimized file's poses: what the rig data itself changed
-  std::string where;        // of end_to_end
+  MatrixDifference end_to_end;  // each file's rig on its own clips
+  MatrixDifference rig_only;    // both rigs on the optimized file's poses: what the rig data itself changed
+  std::string where;            // of end_to_end's largest
   int frames = 0;
   int muscles = 0;
 };
 
-double largestDifference(const RigEvaluation& a, const RigEvaluation& b, const std::vector<size_t>& b_of_a, size_t* at) {
-  double largest = 0.0;
+MatrixDifference largestDifference(const RigEvaluation& a, const RigEvaluation& b, const std::vector<size_t>& b_of_a,
+                                   size_t* at) {
+  MatrixDifference largest;
   for (size_t m = 0; m < b_of_a.size(); ++m) {
-    const double d = (matrixAt(a.skinned, m).matrix() - matrixAt(b.skinned, b_of_a[m]).matrix()).cwiseAbs().maxCoeff();
-    if (d > largest) {
-      largest = d;
-      *at = m;
-    }
+    const Eigen::Matrix4d d = matrixAt(a.skinned, m).matrix() - matrixAt(b.skinned, b_of_a[m]).matrix();
+    const MatrixDifference here{d.block<3, 1>(0, 3).cwiseAbs().maxCoeff(), d.block<3, 3>(0, 0).cwiseAbs().maxCoeff()};
+    if (here > largest) *at = m;
+    largest.translation = std::max(largest.translation, here.translation);
+    largest.linear = std::max(largest.linear, here.linear);
   }
   return largest;
 }
@@ -180,14 +191,15 @@ RigDeviation muscleDeviation(const std::string& original, const std::string& opt
       const RigEvaluation ea = evaluateRig(file_a.rig.rig, pose_a, false);
       const RigEvaluation eb = evaluateRig(file_b.rig.rig, pose_b, false);
       size_t at = 0;
-      const double end_to_end = largestDifference(ea, eb, b_of_a, &at);
-      if (end_to_end > deviation.end_to_end) {
-        deviation.end_to_end = end_to_end;
+      const MatrixDifference end_to_end = largestDifference(ea, eb, b_of_a, &at);
+      if (end_to_end > deviation.end_to_end)
         deviation.where = file_a.rig.names[at] + " @ " + clip_a.name + " t=" + std::to_string(t);
-      }
+      deviation.end_to_end.translation = std::max(deviation.end_to_end.translation, end_to_end.translation);
+      deviation.end_to_end.linear = std::max(deviation.end_to_end.linear, end_to_end.linear);
       for (int j = 0; j < skeleton_a.size(); ++j) pose_a.world[j] = pose_b.world[joint_b_of_a[j]];
-      const RigEvaluation same_pose = evaluateRig(file_a.rig.rig, pose_a, false);
-      deviation.rig_only = std::max(deviation.rig_only, largestDifference(same_pose, eb, b_of_a, &at));
+      const MatrixDifference rig_only = largestDifference(evaluateRig(file_a.rig.rig, pose_a, false), eb, b_of_a, &at);
+      deviation.rig_only.translation = std::max(deviation.rig_only.translation, rig_only.translation);
+      deviation.rig_only.linear = std::max(deviation.rig_only.linear, rig_only.linear);
       ++deviation.frames;
     }
   }
@@ -290,16 +302,22 @@ TEST_CASE("rig pipelines: glTF-Transform optimize with rigbake's config keeps th
     const RigDeviation lossy = muscleDeviation(baked, optimized);
     const RigDeviation lossless = muscleDeviation(baked, exact);
     std::printf("glTF-Transform optimize with rigbake's config, %s: %d muscles, %d frames; bytes %zu baked, %zu optimized, "
-                "%zu without lossy animation steps; largest muscle matrix difference: %.3g m (%s) optimized, %.3g m "
-                "without lossy animation steps, %.3g m from the rig data alone\n",
+                "%zu without lossy animation steps; largest muscle matrix difference, translation / 3x3 part: %.3g m / "
+                "%.3g (%s) optimized, %.3g m / %.3g without lossy animation steps, %.3g m / %.3g from the rig data alone\n",
                 character.c_str(), lossy.muscles, lossy.frames, slurp(baked).size(), slurp(optimized).size(),
-                slurp(exact).size(), lossy.end_to_end, lossy.where.c_str(), lossless.end_to_end,
-                std::max(lossy.rig_only, lossless.rig_only));
+                slurp(exact).size(), lossy.end_to_end.translation, lossy.end_to_end.linear, lossy.where.c_str(),
+                lossless.end_to_end.translation, lossless.end_to_end.linear,
+                std::max(lossy.rig_only.translation, lossless.rig_only.translation),
+                std::max(lossy.rig_only.linear, lossless.rig_only.linear));
     CHECK(lossy.frames > 0);
     // The rig itself comes through unchanged: both rigs on the same joints agree to rounding.
-    CHECK(lossy.rig_only <= 1e-9);
-    CHECK(lossless.rig_only <= 1e-9);
-    // End to end, when optimize leaves the animation alone: issue 31's bound.
-    CHECK(lossless.end_to_end <= kMuscleTolerance);
+    for (const MatrixDifference& rig_only : {lossy.rig_only, lossless.rig_only}) {
+      CHECK(rig_only.translation <= 1e-9);
+      CHECK(rig_only.linear <= 1e-9);
+    }
+    // End to end, when optimize leaves the animation alone: issue 31's bound (and as much for the 3x3 part,
+    // i.e. 1e-4 m at a metre from the joint).
+    CHECK(lossless.end_to_end.translation <= kMuscleTolerance);
+    CHECK(lossless.end_to_end.linear <= kMuscleTolerance);
   }
 }
