@@ -261,7 +261,7 @@ TEST_CASE("rig pipelines: glTF-Transform optimize without rigbake's config cuts 
   CHECK(linesWith(v.run.err, "fewer influences in JOINTS_n/WEIGHTS_n than in the packed buffers") == 1);
 }
 
-TEST_CASE("rig pipelines: glTF-Transform optimize with rigbake's config keeps the rig, every influence, and muscles within 1e-4 m") {
+TEST_CASE("rig pipelines: glTF-Transform optimize with rigbake's config keeps the rig and every influence, muscles within 1e-4 m with exact animation") {
   if (!gltfTransformAvailable()) return;
   TempDir dir;
   struct Input {
