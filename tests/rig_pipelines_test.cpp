@@ -94,14 +94,15 @@ int linesWith(const std::string& text, const std::string& needle) {
   return lines;
 }
 
-void requireStripped(const TempDir& dir, const std::string& path) {
-  const Validation v = validateFile(dir, path);
+Validation requireStripped(const TempDir& dir, const std::string& path) {
+  Validation v = validateFile(dir, path);
   INFO(path << "\n" << v.run.err);
   CHECK(v.run.exit_code == kChecksFailed);
   CHECK(v.status("RIG_EXTENSION_MISSING") == "fail");
   // One line says what happened and which tools do it.
   CHECK(linesWith(v.run.err, "RIG_EXTENSION_MISSING") == 1);
   CHECK(linesWith(v.run.err, "the rig was stripped (gltfpack and glTF-Transform without rigbake's config") == 1);
+  return v;
 }
 
 // Node name of every node reference of the extension, by place ("muscles/3/originNode").
@@ -238,7 +239,12 @@ TEST_CASE("rig pipelines: gltfpack and glTF-Transform copy strip the rig, valida
     CHECK(runCli("view " + ext::shellQuote(baked) + " -o " + ext::shellQuote(dir / "view") + " --player " +
                  ext::shellQuote(player)).exit_code == 0);
   }
-  if (gltfTransformAvailable()) requireStripped(dir, gltfTransform("copy", baked, dir / "copied.glb", false));
+  if (gltfTransformAvailable()) {
+    // copy keeps every influence (only the extension goes): the packed buffers and WEIGHTS_n agree.
+    const Validation copied = requireStripped(dir, gltfTransform("copy", baked, dir / "copied.glb", false));
+    CHECK(copied.status("INFLUENCES_TRUNCATED") == "pass");
+    CHECK(copied.status("PACKED_DEFORMATION_ERROR") == "pass");
+  }
 
   // A sampled bake has no extension, but every clip animates every muscle joint: nothing was lost.
   const Validation sampled = validateFile(dir, bakeTen(dir, sampleGlbPathForCli(), "sampled.glb", "--muscle-motion sampled"));
