@@ -764,7 +764,8 @@ CheckResult checkInfluencesTruncated(const ValidationInputs& inputs, const Valid
   if (!result.has_measured) return skipped(result, "no packed primitive has as many vertices as its WEIGHTS_n");
   measurement.finish(total == 0 ? "every vertex keeps in WEIGHTS_n the influences its packed buffers hold"
                                 : std::to_string(total) + " vertices have fewer influences in JOINTS_n/WEIGHTS_n than "
-                                  "in the packed buffers: a tool cut them (gltfpack keeps 4; docs/pipelines.md)");
+                                  "in the packed buffers: a tool cut them (gltfpack keeps 4, glTF-Transform's optimize without "
+                                  "rigbake's config stores 8-bit weights; docs/pipelines.md)");
   return result;
 }
 
