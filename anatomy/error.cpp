@@ -34,6 +34,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VIEW_NOT_BAKED", ExitCode::kInvalidInput, "rigbake view was given a file that is not a rigbake bake (no rig extension, muscle joints or packed influences)."},
       {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
       {"FBX_PARSE_FAILED", ExitCode::kInvalidInput, "The file is not a readable FBX (Assimp cannot import it: truncation, damage, not FBX) or uses a left-handed axis system."},
+      {"VIEW_RIG_STRIPPED", ExitCode::kInvalidInput, "A baked file's muscle joints have neither the RIGBAKE_muscle_rig extension nor channels: a tool stripped the rig, so the player would show muscles that never move."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

@@ -61,6 +61,12 @@ void checkViewable(const std::string& path, const BakedFileData& file) {
       fail("VIEW_BAKE_INVALID", path + "#" + skin.pointer,
            "its _RIGBAKE_PACKED_* attributes do not decode as docs/packed-influences.md lays them out");
   }
+  // Muscle joints that nothing moves: the extension is gone and the joints have no channels (issue 31).
+  if (const int undriven = undrivenMuscleJoints(file); undriven > 0) {
+    fail("VIEW_RIG_STRIPPED", path,
+         std::to_string(undriven) + " muscle joints without RIGBAKE_muscle_rig or channels: the rig was stripped "
+         "(gltfpack and glTF-Transform without rigbake's config drop it); view the bake itself (docs/pipelines.md)");
+  }
   bool baked = file.rig.present || !file.muscle_nodes.empty();
   for (const FileSkinAttributes& skin : file.skins) baked |= skin.has_packed;
   if (!baked)

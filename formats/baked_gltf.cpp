@@ -323,6 +323,31 @@ void readMuscleNodes(const tinygltf::Model& model, const Character& character, B
   }
 }
 
+// Every node that is a muscle joint by name or by extras, and how many animations move it: what
+// RIG_EXTENSION_MISSING weighs when a tool dropped the extension (issue 31).
+void readMuscleJoints(const tinygltf::Model& model, BakedFileData* data) {
+  static const char* kSuffixes[] = {"_muscleSkinned", "_muscleBase", "_muscleTip", "_muscleDriver"};
+  auto endsWith = [](const std::string& text, const std::string& suffix) {
+    return text.size() > suffix.size() && text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+  };
+  data->animations = static_cast<int>(model.animations.size());
+  for (size_t n = 0; n < model.nodes.size(); ++n) {
+    const std::string& name = model.nodes[n].name;
+    bool muscle = gltfMember(model.nodes[n].extras, "rigbake").IsObject();
+    for (const char* suffix : kSuffixes) muscle = muscle || endsWith(name, suffix);
+    if (!muscle) continue;
+    FileMuscleJoint joint;
+    joint.node = static_cast<int>(n);
+    joint.name = name;
+    for (const tinygltf::Animation& animation : model.animations) {
+      bool moves = false;
+      for (const tinygltf::AnimationChannel& channel : animation.channels) moves = moves || channel.target_node == joint.node;
+      joint.animations_moving_it += moves ? 1 : 0;
+    }
+    data->muscle_joints.push_back(std::move(joint));
+  }
+}
+
 void readAnimationSamplers(const tinygltf::Model& model, BakedFileData* data) {
   for (size_t a = 0; a < model.animations.size(); ++a) {
     const tinygltf::Animation& animation = model.animations[a];
@@ -357,6 +382,7 @@ BakedFileData readBakedFileData(const LoadedCharacter& loaded) {
                                              std::to_string(skin.joints.size()) + " joints"});
   }
   readMuscleNodes(model, character, &data);
+  readMuscleJoints(model, &data);
   readJiggles(model, &data);
   data.rig = readMuscleRigExtension(model, character);
   for (const std::string& problem : data.rig.problems) {

@@ -30,7 +30,9 @@ void writeGltf(tinygltf::Model model, const std::string& path);
 bool isBinaryGltfPath(const std::string& path);
 
 // A loaded file as one GLB: the file's own bytes when `path` is a GLB or VRM, else the document
-// serialized (a .gltf with its buffers and images beside it becomes one self-contained GLB).
+// serialized (a .gltf with its buffers and images beside it becomes one self-contained GLB). A GLB that
+// uses EXT_meshopt_compression or KHR_draco_mesh_compression is the decoded document serialized too,
+// so that whoever reads the result (the `rigbake view` page) needs no decoder.
 std::string glbOf(const std::string& path, const GltfDocument& document);
 
 }  // namespace rigbake

@@ -91,6 +91,12 @@ const std::vector<CheckDefinition>& checkDefinitions() {
        "Smallest mean move of a muscle's skin along the normal at its most compressed sample (positive: out)"},
       {"MUSCLE_STRETCH_NO_HOLLOW", Severity::kWarning, -0.001, Comparison::kAtLeast, "x body height",
        "Smallest mean move of a muscle's skin along the normal at its most stretched sample (negative: a hollow)"},
+      // Issue 31: tools that do not know rigbake (gltfpack, glTF-Transform without rigbake's config) drop
+      // the extension or cut the influences without an error; a CI gate must see it.
+      {"RIG_EXTENSION_MISSING", Severity::kError, 0.0, Comparison::kAtMost, "joints",
+       "Muscle joints that neither the RIGBAKE_muscle_rig extension nor every clip's channels drive (a tool stripped the rig)"},
+      {"INFLUENCES_TRUNCATED", Severity::kError, 0.0, Comparison::kAtMost, "vertices",
+       "Vertices whose JOINTS_n/WEIGHTS_n hold fewer influences than the packed buffers (a tool cut them)"},
       {"GLTF_STRUCTURE", Severity::kError, 0.0, Comparison::kAtMost, "issues",
        "Structural problems: accessor counts and types, skins, muscle joint nodes and their animation"},
       {"KHRONOS_VALIDATOR", Severity::kError, 0.0, Comparison::kAtMost, "errors",
@@ -721,6 +727,94 @@ CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const Val
   return checkMuscleMove(inputs, config, "MUSCLE_STRETCH_NO_HOLLOW", false);
 }
 
+static bool drivenByChannels(const BakedFileData& file, const FileMuscleJoint& joint) {
+  return file.animations > 0 && joint.animations_moving_it == file.animations;
+}
+
+int undrivenMuscleJoints(const BakedFileData& file) {
+  if (file.rig.present) return 0;
+  int undriven = 0;
+  for (const FileMuscleJoint& joint : file.muscle_joints) undriven += drivenByChannels(file, joint) ? 0 : 1;
+  return undriven;
+}
+
+CheckResult checkRigExtensionMissing(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("RIG_EXTENSION_MISSING", config);
+  const BakedFileData& file = *inputs.file;
+  if (file.muscle_joints.empty()) return skipped(result, "the file has no muscle joints (by name or extras.rigbake)");
+  const int joints = static_cast<int>(file.muscle_joints.size());
+  result.has_measured = true;
+  if (file.rig.present) {
+    result.status = CheckStatus::kPass;
+    result.message = std::to_string(joints) + " muscle joints, driven by the RIGBAKE_muscle_rig extension";
+    return result;
+  }
+  // Without the extension only channels move a muscle joint: a sampled bake animates every one of them
+  // in every clip; a runtime bake that lost its extension animates none.
+  const int undriven = undrivenMuscleJoints(file);
+  for (const FileMuscleJoint& joint : file.muscle_joints) {
+    if (drivenByChannels(file, joint)) continue;
+    if (result.findings.size() < static_cast<size_t>(kMaxFindings))
+      result.findings.push_back({"/nodes/" + std::to_string(joint.node), 1.0,
+                                 joint.name + ": no RIGBAKE_muscle_rig, channels in " +
+                                     std::to_string(joint.animations_moving_it) + " of " +
+                                     std::to_string(file.animations) + " animations"});
+  }
+  result.measured = undriven;
+  result.status = withinThreshold(result, result.measured) ? CheckStatus::kPass : CheckStatus::kFail;
+  if (undriven == 0) {
+    result.message = std::to_string(joints) + " muscle joints, every one animated in every clip (a sampled bake)";
+    return result;
+  }
+  result.location = result.findings.front().location;
+  result.message = std::to_string(undriven) + " of " + std::to_string(joints) +
+                   " muscle joints without RIGBAKE_muscle_rig or channels: the rig was stripped (gltfpack and "
+                   "glTF-Transform without rigbake's config drop it; docs/pipelines.md)";
+  return result;
+}
+
+CheckResult checkInfluencesTruncated(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck("INFLUENCES_TRUNCATED", config);
+  bool any_packed = false;
+  for (const FileSkinAttributes& skin : inputs.file->skins) any_packed = any_packed || skin.has_packed;
+  if (!any_packed) return skipped(result, "the file has no decodable _RIGBAKE_PACKED_* attributes to compare with");
+  Measurement measurement(&result);
+  int total = 0;
+  for (const FileSkinAttributes& skin : inputs.file->skins) {
+    const int count = skin.slots ? static_cast<int>(skin.weights.size()) / skin.slots : 0;
+    // An index out of range stops the decoder; JOINT_INDEX_IN_RANGE reports it.
+    if (!skin.has_packed || skin.packed.vertex_count != count || !packedInfluencesProblem(skin.packed).empty()) continue;
+    const QuantizedInfluences packed = unpackInfluences(skin.packed);
+    int truncated = 0, worst_vertex = -1, worst_packed = 0, worst_standard = 0;
+    for (int v = 0; v < count; ++v) {
+      int in_packed = 0, in_standard = 0;
+      for (int k = 0; k < packed.slots_per_vertex; ++k)
+        in_packed += packed.weights[static_cast<size_t>(v) * packed.slots_per_vertex + k] != 0;
+      for (int k = 0; k < skin.slots; ++k) in_standard += skin.weights[static_cast<size_t>(v) * skin.slots + k] != 0.0;
+      if (in_standard >= in_packed) continue;
+      ++truncated;
+      if (worst_vertex < 0 || in_packed - in_standard > worst_packed - worst_standard) {
+        worst_vertex = v;
+        worst_packed = in_packed;
+        worst_standard = in_standard;
+      }
+    }
+    total += truncated;
+    measurement.add(truncated, skin.pointer + "/attributes",
+                    "packed buffers hold " + std::to_string(skin.packed.influences) + " influences, JOINTS_n/WEIGHTS_n " +
+                        std::to_string(skin.slots) + " slots" +
+                        (truncated ? "; vertex " + std::to_string(worst_vertex) + " has " + std::to_string(worst_packed) +
+                                         " packed and " + std::to_string(worst_standard) + " in WEIGHTS_n"
+                                   : std::string()));
+  }
+  if (!result.has_measured) return skipped(result, "no packed primitive has as many vertices as its WEIGHTS_n");
+  measurement.finish(total == 0 ? "every vertex keeps in WEIGHTS_n the influences its packed buffers hold"
+                                : std::to_string(total) + " vertices have fewer influences in JOINTS_n/WEIGHTS_n than "
+                                  "in the packed buffers: a tool cut them (gltfpack keeps 4, glTF-Transform's optimize without "
+                                  "rigbake's config stores 8-bit weights; docs/pipelines.md)");
+  return result;
+}
+
 CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck("GLTF_STRUCTURE", config);
   std::vector<FileIssue> issues = inputs.file->structure;
@@ -948,6 +1042,8 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkBodyVolume(inputs, config));
   report.checks.push_back(checkMuscleBulgeOutward(inputs, config));
   report.checks.push_back(checkMuscleStretchNoHollow(inputs, config));
+  report.checks.push_back(checkRigExtensionMissing(inputs, config));
+  report.checks.push_back(checkInfluencesTruncated(inputs, config));
   report.checks.push_back(checkGltfStructure(inputs, config));
   report.checks.push_back(checkKhronosValidator(inputs, config));
   assert(report.checks.size() == checkDefinitions().size());

@@ -111,6 +111,16 @@ struct FileIssue {
   std::string message;
 };
 
+// A node that is one of the bake's muscle joints by its name (pipeline/bake.h muscleJointName(): the
+// suffixes _muscleSkinned, _muscleBase, _muscleTip, _muscleDriver) or by its extras.rigbake: what is left
+// of the rig when a tool that does not know rigbake drops the extension (gltfpack drops extras too,
+// and keeps names).
+struct FileMuscleJoint {
+  int node = -1;
+  std::string name;
+  int animations_moving_it = 0;  // animations with a channel that targets the node
+};
+
 // A baked jiggle's angle from its animated direction and its cone's half-angle in that direction,
 // degrees, at each sample time, as the bake recorded them in the animation's extras (the animated
 // direction itself is no longer in the file once the jiggle replaced the channels).
@@ -144,6 +154,8 @@ struct BakedFileData {
   FileMuscleRig rig;
   std::vector<ClipJiggles> jiggles;
   std::vector<FileMuscleNode> muscle_nodes;
+  std::vector<FileMuscleJoint> muscle_joints;  // by name or extras, in node order
+  int animations = 0;                          // the file's animations
   std::vector<FileIssue> structure;  // structural problems found while reading
 };
 
@@ -291,8 +303,15 @@ CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationC
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkRigExtensionMissing(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkInfluencesTruncated(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkGltfStructure(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkKhronosValidator(const ValidationInputs& inputs, const ValidationConfig& config);
+
+// Muscle joints of the file that nothing drives: all of them that no channel moves in every animation,
+// when the file has no RIGBAKE_muscle_rig extension; 0 when it has (RIG_EXTENSION_MISSING's measure,
+// and why `rigbake view` refuses a file).
+int undrivenMuscleJoints(const BakedFileData& file);
 
 // Plot data (and inputs of the checks above that take them).
 std::vector<ClipRatios> muscleRatiosOverClips(const Character& character, const MuscleSet& muscles);

@@ -201,7 +201,7 @@ template <unsigned kSetMask, typename Visit>
 void skinSkinningBatch(const SkinningBatch& batch, const FloatSkinFrame& frame, size_t begin, size_t end, Visit&& visit) {
   using skinning_batch_detail::splat;
   const Float4* linear = frame.linear.data();
-  SkinnedGroup group;
+  SkinnedGroup group{};  // value-initialized: GCC 12 may otherwise flag offset sets a mask leaves unset (-Wmaybe-uninitialized)
   for (size_t g = begin; g < end; ++g) {
     group.x = splat(batch.positions[3 * g]);
     group.y = splat(batch.positions[3 * g + 1]);

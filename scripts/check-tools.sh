@@ -15,7 +15,8 @@
 #                      its pty module for the terminal progress test (cli_bake_test)
 #   ninja              ninja-build (cli_build_test runs the emitted Ninja file)
 #   gltfpack           gltfpack (compressed inputs: EXT_meshopt_compression, KHR_mesh_quantization)
-#   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression)
+#   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression; optimize with
+#                      rigbake's config, gltf-transform/, and without it: tests/rig_pipelines_test.cpp)
 #
 # Prints one line per problem on stderr and exits 1 when there is any; prints one summary line and
 # exits 0 otherwise.
@@ -115,6 +116,12 @@ else
   elif ! timeout 120 "$gltf_transform" draco "$work/triangle.gltf" "$work/triangle-draco.glb" >"$work/gltf-transform.log" 2>&1 ||
        ! grep -q KHR_draco_mesh_compression "$work/triangle-draco.glb"; then
     missing "gltf-transform draco fails: $(grep -v '^$' "$work/gltf-transform.log" | tail -n 1) (run scripts/install-gltf-transform.sh)"
+  # ... and optimizes it with rigbake's config (gltf-transform/rigbake.config.mjs loads the CLI's own
+  # @gltf-transform/core; optimize imports sharp and the meshopt encoder), as tests/rig_pipelines_test.cpp does.
+  elif ! timeout 120 "$gltf_transform" optimize "$work/triangle.gltf" "$work/triangle-optimized.glb" \
+         --config "$repo/gltf-transform/rigbake.config.mjs" >"$work/gltf-transform.log" 2>&1 ||
+       ! grep -q EXT_meshopt_compression "$work/triangle-optimized.glb"; then
+    missing "gltf-transform optimize --config gltf-transform/rigbake.config.mjs fails: $( (grep -m 1 'rror' "$work/gltf-transform.log" || tail -n 1 "$work/gltf-transform.log") | cut -c 1-200) (run scripts/install-gltf-transform.sh)"
   fi
 fi
 

@@ -25,11 +25,6 @@ namespace {
 
 constexpr double kCompressedTolerance = 0.002;  // 2 mm, in the scene's metres
 
-std::string gltfTransformBinary() {
-  const char* override_path = std::getenv("RIGBAKE_GLTF_TRANSFORM");
-  return override_path ? override_path : test::sourceDir() + "/.tools/gltf-transform/node_modules/.bin/gltf-transform";
-}
-
 struct CompressedInput {
   std::string asset;      // shared asset name
   std::string original;   // its path
@@ -51,8 +46,8 @@ const std::vector<CompressedInput>& compressedInputsOf(const std::string& name) 
   const std::string original = test::requireAsset(name);
   const bool gltfpack = ext::requireTool(ext::onPath("gltfpack"), "gltfpack (Debian package gltfpack)");
   const bool gltf_transform =
-      ext::requireTool(test::fileExists(gltfTransformBinary()),
-                       "gltf-transform (scripts/install-gltf-transform.sh, at " + gltfTransformBinary() + ")");
+      ext::requireTool(test::fileExists(ext::gltfTransformCli()),
+                       "gltf-transform (scripts/install-gltf-transform.sh, at " + ext::gltfTransformCli() + ")");
   std::string stem = name.substr(name.find_last_of('/') + 1);
   stem = stem.substr(0, stem.find('.'));
   struct Recipe {
@@ -82,7 +77,7 @@ const std::vector<CompressedInput>& compressedInputsOf(const std::string& name) 
       command = "gltfpack -i " + ext::shellQuote(original) + " -o " + ext::shellQuote(out) + recipe.variant.substr(8);
     } else {
       command =
-          ext::shellQuote(gltfTransformBinary()) + " draco " + ext::shellQuote(original) + " " + ext::shellQuote(out);
+          ext::shellQuote(ext::gltfTransformCli()) + " draco " + ext::shellQuote(original) + " " + ext::shellQuote(out);
     }
     ext::CommandResult run = ext::runCommand(command + " 2>&1");
     INFO(command << "\n" << run.output);

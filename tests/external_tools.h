@@ -77,6 +77,12 @@ class ScratchDir {
   std::string path_;
 };
 
+// glTF-Transform's CLI as scripts/install-gltf-transform.sh installs it ($RIGBAKE_GLTF_TRANSFORM overrides).
+inline std::string gltfTransformCli() {
+  const char* override_path = std::getenv("RIGBAKE_GLTF_TRANSFORM");
+  return override_path ? override_path : sourceDir() + "/.tools/gltf-transform/node_modules/.bin/gltf-transform";
+}
+
 inline std::string validatorRunner() { return sourceDir() + "/scripts/gltf-validate.js"; }
 
 inline bool validatorAvailable() {
