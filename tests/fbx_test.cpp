@@ -219,8 +219,10 @@ TEST_CASE("FBX cli: place and bake Male_Casual, the GLB passes the Khronos valid
     for (const char* skinning : {"input", "dual_quaternion", "rig"}) CHECK(per_clip[name][skinning]["change_percent"].is_number());
     CHECK(bake.err.find("volume in '" + name + "': input skinning") != std::string::npos);
   }
-  // The rig keeps more volume than linear skinning over the clips (Male_Casual: RMS 4.7 % -> 1.1 %).
-  CHECK(bake.err.find("whole-body volume change (RMS) 4.705 % -> 1.118 %") != std::string::npos);
+  // The rig keeps more volume than linear skinning over the clips (Male_Casual: RMS 4.7 % -> 1.2 %;
+  // 1.118 % before its 7 meshes were welded into one body for the muscle weights, which closed their
+  // borders: see tests/skin_seams_test.cpp).
+  CHECK(bake.err.find("whole-body volume change (RMS) 4.706 % -> 1.182 %") != std::string::npos);
   // The conversion is deterministic: a second bake gives the same bytes.
   REQUIRE(test::runCli("bake " + ext::shellQuote(path) + " --muscles " + (dir / "muscles.json") + " -o " + (dir / "again.glb"))
               .exit_code == 0);
