@@ -33,6 +33,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VIEW_PLAYER_MISSING", ExitCode::kIo, "rigbake view cannot find the bundled player script (scripts/install-player.sh builds it)."},
       {"VIEW_NOT_BAKED", ExitCode::kInvalidInput, "rigbake view was given a file that is not a rigbake bake (no rig extension, muscle joints or packed influences)."},
       {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
+      {"IO_OUTPUT_NOT_REGULAR", ExitCode::kIo, "An output path exists and is not a regular file (a device, FIFO, socket or directory), so it is not replaced."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

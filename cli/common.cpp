@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "anatomy/error.h"
+#include "formats/atomic_file.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
 
@@ -122,6 +123,16 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   resolved.loaded = loadCharacter(path);
   resolved.landmarks = resolveLandmarks(resolved.loaded.character, inputs);
   return resolved;
+}
+
+void checkOutputOptions(std::initializer_list<OutputOption> outputs) {
+  for (const OutputOption& output : outputs) {
+    if (output.path.empty()) {
+      if (output.required) fail("USAGE", output.option, "names no file (an empty path)");
+      continue;
+    }
+    checkOutputPath(output.path);
+  }
 }
 
 std::string fileNameOf(const std::string& path) {

@@ -146,9 +146,13 @@ void writeReports(const Report& report, const ReportPaths& paths, int threads) {
     if (!parent.empty()) std::filesystem::create_directories(parent, error);
     if (error) fail("IO_WRITE_FAILED", parent.string(), "cannot create the report directory: " + error.message());
   }
-  writeFileAtomically(paths.json, json);
-  writeFileAtomically(paths.junit, junit);
-  writeFileAtomically(paths.html, html);
+  // The three or none: a report.html that cannot be written must not leave a new report.json that says
+  // the opposite of the old report.html.
+  OutputBatch outputs;
+  outputs.add(paths.json, json);
+  outputs.add(paths.junit, junit);
+  outputs.add(paths.html, html);
+  outputs.commit();
 }
 
 }  // namespace rigbake::cli

@@ -12,8 +12,12 @@
 
 namespace rigbake {
 
-void writeFileAtomically(const std::string& path, const std::string& bytes) {
-  std::string temp_path = path + ".rigbake-tmp-XXXXXX";
+namespace {
+
+// Writes `bytes` to a new temporary file beside `target` and returns its path; removes it and throws
+// IO_WRITE_FAILED (naming `path`, as the user gave it) when it cannot.
+std::string writeTemporary(const std::string& path, const std::string& target, const std::string& bytes) {
+  std::string temp_path = target + kTempFileMarker + "XXXXXX";
   int fd = mkstemp(temp_path.data());
   if (fd < 0) fail("IO_WRITE_FAILED", path, std::string("cannot create a temporary file: ") + std::strerror(errno));
   size_t written = 0;
@@ -30,11 +34,80 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
   }
   // mkstemp creates 0600; outputs are ordinary files others may read.
   fchmod(fd, 0644);
-  if (::close(fd) != 0 || std::rename(temp_path.c_str(), path.c_str()) != 0) {
+  // close() is where NFS and a full disk may report a failed write-back.
+  if (::close(fd) != 0) {
     std::string reason = std::strerror(errno);
     std::remove(temp_path.c_str());
-    fail("IO_WRITE_FAILED", path, "cannot move the finished file into place: " + reason);
+    fail("IO_WRITE_FAILED", path, "cannot write: " + reason);
   }
+  return temp_path;
+}
+
+}  // namespace
+
+std::string checkOutputPath(const std::string& path) {
+  // Following the path as the kernel does first: /proc/self/fd/1 is a link whose text ("pipe:[7]") names
+  // nothing, but what it reaches is not a regular file either.
+  struct stat reached {};
+  if (::stat(path.c_str(), &reached) == 0 && !S_ISREG(reached.st_mode)) {
+    const char* kind = S_ISDIR(reached.st_mode)   ? "a directory"
+                       : S_ISCHR(reached.st_mode) ? "a character device"
+                       : S_ISBLK(reached.st_mode) ? "a block device"
+                       : S_ISFIFO(reached.st_mode) ? "a FIFO"
+                       : S_ISSOCK(reached.st_mode) ? "a socket"
+                                                   : "not a regular file";
+    fail("IO_OUTPUT_NOT_REGULAR", path, std::string("exists and is ") + kind +
+                                            "; rigbake replaces only regular files (name a file to write)");
+  }
+  // A symbolic link: the temporary file goes beside the file it names, and the rename replaces that file,
+  // not the link (a dangling link creates its target, as `>` would).
+  std::string target = path;
+  for (int hops = 0; hops < 40; ++hops) {
+    struct stat link {};
+    if (::lstat(target.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return target;
+    std::string text(static_cast<size_t>(link.st_size > 0 ? link.st_size : 4096) + 1, '\0');
+    ssize_t n = ::readlink(target.c_str(), text.data(), text.size());
+    if (n < 0) fail("IO_WRITE_FAILED", path, std::string("cannot read the symbolic link: ") + std::strerror(errno));
+    text.resize(static_cast<size_t>(n));
+    const size_t slash = target.find_last_of('/');
+    target = text[0] == '/' || slash == std::string::npos ? text : target.substr(0, slash + 1) + text;
+  }
+  fail("IO_WRITE_FAILED", path, "too many levels of symbolic links");
+}
+
+void writeFileAtomically(const std::string& path, const std::string& bytes) {
+  OutputBatch batch;
+  batch.add(path, bytes);
+  batch.commit();
+}
+
+void OutputBatch::add(std::string path, std::string bytes) { files_.emplace_back(std::move(path), std::move(bytes)); }
+
+void OutputBatch::commit() {
+  std::vector<std::string> targets, temps, renamed;
+  auto removeAll = [&](const std::vector<std::string>& paths) {
+    for (const std::string& p : paths) std::remove(p.c_str());
+  };
+  try {
+    for (const auto& [path, bytes] : files_) targets.push_back(checkOutputPath(path));
+    for (size_t i = 0; i < files_.size(); ++i) temps.push_back(writeTemporary(files_[i].first, targets[i], files_[i].second));
+  } catch (...) {
+    removeAll(temps);
+    throw;
+  }
+  // Every byte is on disk: only the renames are left, which within one directory fail only for what
+  // checkOutputPath has ruled out (or a race with another program).
+  for (size_t i = 0; i < temps.size(); ++i) {
+    if (std::rename(temps[i].c_str(), targets[i].c_str()) == 0) {
+      renamed.push_back(targets[i]);
+      continue;
+    }
+    std::string reason = std::strerror(errno);
+    removeAll(std::vector<std::string>(temps.begin() + static_cast<long>(i), temps.end()));
+    removeAll(renamed);
+    fail("IO_WRITE_FAILED", files_[i].first, "cannot move the finished file into place: " + reason);
+  }
+  files_.clear();
 }
 
 std::string readFile(const std::string& path) {

@@ -1,13 +1,40 @@
 // Outputs appear whole or not at all: bytes go to a temporary file beside the target, which is
-// renamed over it only once everything was written. A failed run leaves no partial file behind.
+// renamed over it only once everything was written. A failed run leaves no partial file behind, and a
+// command with several outputs commits them together (OutputBatch), so a failure leaves none of them.
 #pragma once
 
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace rigbake {
 
-// Throws Error IO_WRITE_FAILED naming `path` when it cannot write or rename.
+// Suffix of the temporary files outputs are written to; `rigbake build` removes leftovers of killed
+// runs by it.
+inline constexpr const char* kTempFileMarker = ".rigbake-tmp-";
+
+// The file an output path writes: a symbolic link is followed to its target (as a shell's `>` does), so
+// the link stays and the file it names is replaced. Throws Error IO_OUTPUT_NOT_REGULAR when the path
+// exists and is not a regular file (a device, FIFO, socket or directory), so that /dev/null stays a
+// device; IO_WRITE_FAILED for a link loop. Commands call it on every output before any work.
+std::string checkOutputPath(const std::string& path);
+
+// Throws Error IO_WRITE_FAILED naming `path` when it cannot write or rename; IO_OUTPUT_NOT_REGULAR as
+// checkOutputPath.
 void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+// Several outputs of one command, committed together: commit() checks every path, writes every
+// temporary file, and renames them into place only once all are written. On any failure it removes
+// its temporary files (and any output it had already renamed, so a failed run leaves no mix of new
+// and old files) and throws the Error.
+class OutputBatch {
+ public:
+  void add(std::string path, std::string bytes);
+  void commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> files_;
+};
 
 // Reads a whole file; throws Error IO_FILE_NOT_FOUND naming `path` when it cannot.
 std::string readFile(const std::string& path);

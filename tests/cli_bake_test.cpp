@@ -240,3 +240,21 @@ TEST_CASE("cli bake: bad input gives one line, a stable code, and no output file
   }
   expectNoOutputs(dir);
 }
+
+TEST_CASE("cli bake: an output that cannot be written leaves none of the others, -o included") {
+  TempDir dir;
+  std::ofstream(dir / "block") << "a regular file, so block/x cannot be created";
+  std::string stats = dir / "stats.json", packed = dir / "p.rbpk", muscles = dir / "m.json";
+  std::string failing;
+  SECTION("--stats") { failing = stats = dir / "block/stats.json"; }
+  SECTION("--packed-out") { failing = packed = dir / "block/p.rbpk"; }
+  SECTION("--muscles-out") { failing = muscles = dir / "block/m.json"; }
+  const CliResult run = runCli("bake " + sampleGlbPathForCli() + " -o " + (dir / "a.glb") + " --stats " +
+                                     stats + " --packed-out " + packed + " --muscles-out " + muscles);
+  INFO(run.err);
+  CHECK(run.exit_code == 2);
+  CHECK(lineCount(run.err) == 1);
+  CHECK(run.err.rfind("IO_WRITE_FAILED " + failing + ":", 0) == 0);
+  // Before issue 34, a.glb (and the outputs before the failing one) stayed.
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path)) CHECK(entry.path().filename() == "block");
+}

@@ -1,8 +1,12 @@
 // The command line as users meet it: clear one-line errors with stable codes and exit statuses, no
 // output left behind by a failed run, deterministic outputs, and the documented --json contract.
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -10,8 +14,10 @@
 
 #include "anatomy/error.h"
 #include "cli_support.h"
+#include "external_tools.h"
 
 using namespace rigbake::test;
+namespace ext = rigbake::test::external;
 
 namespace {
 
@@ -320,4 +326,85 @@ TEST_CASE("cli: a preset naming an unknown landmark says which and where") {
   expectFailure(r, "PRESET_LANDMARK_UNKNOWN", 3, dir / "m.json");
   CHECK(r.err.find("unknown.json#/muscles/4/origin_attach") != std::string::npos);
   CHECK(r.err.find("shoulderblade") != std::string::npos);
+}
+
+namespace {
+
+// Names of the entries of `dir`.
+std::set<std::string> namesIn(const std::string& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+bool isCharacterDeviceAt(const std::string& path) {
+  struct stat status {};
+  return ::lstat(path.c_str(), &status) == 0 && S_ISCHR(status.st_mode);
+}
+
+bool isFifoAt(const std::string& path) {
+  struct stat status {};
+  return ::lstat(path.c_str(), &status) == 0 && S_ISFIFO(status.st_mode);
+}
+
+}  // namespace
+
+TEST_CASE("cli: an output that is a device, a FIFO or a directory is refused before any work and stays what it was") {
+  TempDir dir;
+  // A private /dev/null (tests run as root): if rigbake replaced it, no other program would notice.
+  const std::string null = dir / "null", fifo = dir / "fifo", folder = dir / "folder";
+  REQUIRE(::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0);
+  REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
+  std::filesystem::create_directories(folder);
+  const std::string sample = ext::shellQuote(sampleGlbPathForCli());
+  struct Case {
+    std::string args, refused;
+  };
+  const std::vector<Case> cases = {
+      {"sample -o " + ext::shellQuote(null), null},
+      {"sample -o " + ext::shellQuote(fifo), fifo},
+      {"sample -o " + ext::shellQuote(folder), folder},
+      {"place " + sample + " -o " + ext::shellQuote(null), null},
+      {"bake " + sample + " -o " + ext::shellQuote(null) + " --stats " + ext::shellQuote(dir / "stats.json"), null},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --stats " + ext::shellQuote(fifo), fifo},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --packed-out " + ext::shellQuote(null), null},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --muscles-out " + ext::shellQuote(folder), folder},
+      {"rom " + sample + " -o " + ext::shellQuote(null), null},
+  };
+  for (const Case& c : cases) {
+    const CliResult run = runCli(c.args);
+    INFO(c.args << "\n" << run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_OUTPUT_NOT_REGULAR " + c.refused + ":", 0) == 0);
+    CHECK(isCharacterDeviceAt(null));
+    CHECK(isFifoAt(fifo));
+    CHECK(std::filesystem::is_directory(folder));
+    CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
+    CHECK(std::filesystem::is_empty(folder));
+  }
+}
+
+TEST_CASE("cli: an output that is a symbolic link writes the file it names and keeps the link") {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "real");
+  std::ofstream(dir / "real/sample.glb") << "old";
+  std::filesystem::create_symlink("real/sample.glb", dir / "link.glb");
+  const CliResult run = runCli("sample -o " + ext::shellQuote(dir / "link.glb"));
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  CHECK(std::filesystem::is_symlink(dir / "link.glb"));
+  CHECK(slurp(dir / "real/sample.glb") == slurp(sampleGlbPathForCli()));
+  CHECK(namesIn(dir / "real") == std::set<std::string>{"sample.glb"});
+}
+
+TEST_CASE("cli: an empty output path is USAGE, not a file with no name") {
+  for (const std::string& args : {std::string("sample -o ''"), "place " + ext::shellQuote(sampleGlbPathForCli()) + " -o ''",
+                                  "bake " + ext::shellQuote(sampleGlbPathForCli()) + " -o ''"}) {
+    const CliResult run = runCli(args);
+    INFO(args << "\n" << run.err);
+    CHECK(run.exit_code == 1);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("USAGE -o:", 0) == 0);
+  }
 }
