@@ -34,6 +34,8 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VIEW_NOT_BAKED", ExitCode::kInvalidInput, "rigbake view was given a file that is not a rigbake bake (no rig extension, muscle joints or packed influences)."},
       {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
       {"IO_OUTPUT_NOT_REGULAR", ExitCode::kIo, "An output path exists and is not a regular file (a device, FIFO, socket or directory), so it is not replaced."},
+      {"BUILD_OUTPUT_LOCKED", ExitCode::kIo, "Another rigbake build is writing into the same output folder (it holds OUT/.rigbake-lock)."},
+      {"BUILD_SOURCE_FAILED", ExitCode::kChecksFailed, "A build character's muscles_from source failed, so it could not be built (the run ends BUILD_FAILED)."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

@@ -3,8 +3,11 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <fcntl.h>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -108,6 +111,50 @@ void OutputBatch::commit() {
     fail("IO_WRITE_FAILED", files_[i].first, "cannot move the finished file into place: " + reason);
   }
   files_.clear();
+}
+
+void createDirectories(const std::string& path) {
+  if (path.empty()) fail("IO_WRITE_FAILED", "\"\"", "an empty path names no directory");
+  std::error_code error;
+  std::filesystem::create_directories(path, error);
+  if (error) fail("IO_WRITE_FAILED", path, "cannot create the directory: " + error.message());
+  if (!std::filesystem::is_directory(path, error)) fail("IO_WRITE_FAILED", path, "exists and is not a directory");
+}
+
+FolderLock::~FolderLock() {
+  if (fd_ >= 0) ::close(fd_);  // closing the descriptor releases the flock
+}
+
+bool FolderLock::tryLock(const std::string& directory, bool exclusive) {
+  const std::string path = directory + "/.rigbake-lock";
+  fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0) fail("IO_WRITE_FAILED", path, std::string("cannot open the lock file: ") + std::strerror(errno));
+  while (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
+    if (errno == EINTR) continue;
+    if (errno == EWOULDBLOCK) return false;
+    fail("IO_WRITE_FAILED", path, std::string("cannot lock: ") + std::strerror(errno));
+  }
+  return true;
+}
+
+int removeTemporaryLeftovers(const std::string& directory) {
+  namespace fs = std::filesystem;
+  int removed = 0;
+  auto sweep = [&](const fs::path& folder, auto& self, int depth) -> void {
+    std::error_code error;
+    for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+      const std::string name = it->path().filename().string();
+      std::error_code type_error;
+      if (name.find(kTempFileMarker) != std::string::npos && !it->is_directory(type_error)) {
+        std::error_code remove_error;
+        removed += fs::remove(it->path(), remove_error) ? 1 : 0;
+      } else if (depth > 0 && it->is_directory(type_error) && !it->is_symlink(type_error)) {
+        self(it->path(), self, depth - 1);
+      }
+    }
+  };
+  sweep(directory, sweep, 1);
+  return removed;
 }
 
 std::string readFile(const std::string& path) {

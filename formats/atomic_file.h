@@ -36,6 +36,33 @@ class OutputBatch {
   std::vector<std::pair<std::string, std::string>> files_;
 };
 
+// mkdir -p; throws Error IO_WRITE_FAILED naming `path` (an empty one, one under a regular file, a name
+// too long, a read-only file system) instead of std::filesystem's exception, which reached users as
+// INTERNAL.
+void createDirectories(const std::string& path);
+
+// An advisory lock (flock(2)) on DIRECTORY/.rigbake-lock, held until destruction: one writer
+// (exclusive) or several that write disjoint files in it (shared). The kernel drops it when the process
+// dies, so a killed run never leaves a stale lock.
+class FolderLock {
+ public:
+  FolderLock() = default;
+  FolderLock(const FolderLock&) = delete;
+  FolderLock& operator=(const FolderLock&) = delete;
+  ~FolderLock();
+  // False when another process holds a conflicting lock; IO_WRITE_FAILED when the lock file cannot be
+  // opened. Does not wait.
+  bool tryLock(const std::string& directory, bool exclusive);
+
+ private:
+  int fd_ = -1;
+};
+
+// Removes the temporary files (names holding kTempFileMarker) that a killed run left in `directory`
+// and in its subdirectories one level down; returns how many. Only safe while no other rigbake writes
+// there (hold an exclusive FolderLock).
+int removeTemporaryLeftovers(const std::string& directory);
+
 // Reads a whole file; throws Error IO_FILE_NOT_FOUND naming `path` when it cannot.
 std::string readFile(const std::string& path);
 
