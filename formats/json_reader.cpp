@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "anatomy/error.h"
 #include "formats/atomic_file.h"
@@ -89,6 +91,20 @@ double JsonReader::asNumber() const {
   if (!value_.is_number()) fail("must be a number");
   double number = value_.get<double>();
   if (!std::isfinite(number)) fail("must be a finite number");
+  return number;
+}
+
+double JsonReader::asNumberIn(double min, double max, const std::string& unit) const {
+  const double number = asNumber();
+  if (number < min || number > max) {
+    auto text = [](double value) {
+      std::ostringstream out;
+      out << std::setprecision(6) << value;
+      return out.str();
+    };
+    const std::string suffix = unit.empty() ? "" : " " + unit;
+    fail("must be between " + text(min) + suffix + " and " + text(max) + suffix + " (got " + text(number) + ")");
+  }
   return number;
 }
 

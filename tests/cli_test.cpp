@@ -14,6 +14,7 @@
 
 #include "anatomy/error.h"
 #include "cli_support.h"
+#include "glb_support.h"
 #include "external_tools.h"
 
 using namespace rigbake::test;
@@ -407,4 +408,44 @@ TEST_CASE("cli: an empty output path is USAGE, not a file with no name") {
     CHECK(lineCount(run.err) == 1);
     CHECK(run.err.rfind("USAGE -o:", 0) == 0);
   }
+}
+
+namespace {
+
+// `glb` with its JSON chunk replaced by `json` (the binary chunk kept as is).
+std::string glbWithJson(const std::string& glb, const nlohmann::json& json) {
+  std::uint32_t json_length = 0;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  std::string text = json.dump();
+  while (text.size() % 4 != 0) text += ' ';
+  auto word = [](std::uint32_t value) { return std::string(reinterpret_cast<const char*>(&value), 4); };
+  const std::string rest = glb.substr(20 + json_length);
+  const std::string body = word(static_cast<std::uint32_t>(text.size())) + "JSON" + text + rest;
+  return "glTF" + word(2) + word(static_cast<std::uint32_t>(12 + body.size())) + body;
+}
+
+}  // namespace
+
+TEST_CASE("cli: a skeleton whose root joint has a zero scale is GLTF_SKIN_INVALID, not NaN or an assertion") {
+  // The bind transforms then have no axes: the pose code asserted (sanitizer build) or wrote NaN.
+  TempDir dir;
+  const std::string glb = slurp(sampleGlbPathForCli());
+  nlohmann::json json = glbJson(glb);
+  std::set<int> children;
+  for (const auto& node : json["nodes"])
+    if (node.contains("children")) children.insert(node["children"].begin(), node["children"].end());
+  int root = -1;
+  for (const auto& joint : json["skins"][0]["joints"])
+    if (!children.count(joint.get<int>())) root = joint.get<int>();
+  REQUIRE(root >= 0);
+  json["nodes"][root].erase("matrix");
+  json["nodes"][root]["scale"] = {0.0, 0.0, 0.0};
+  std::ofstream(dir / "flat.glb", std::ios::binary) << glbWithJson(glb, json);
+  const CliResult run = runCli("bake " + (dir / "flat.glb") + " -o " + (dir / "baked.glb"));
+  INFO(run.err);
+  CHECK(run.exit_code == 3);
+  CHECK(lineCount(run.err) == 1);
+  CHECK(run.err.rfind("GLTF_SKIN_INVALID " + (dir / "flat.glb") + ":", 0) == 0);
+  CHECK(run.err.find("degenerate") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "baked.glb"));
 }
