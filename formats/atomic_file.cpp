@@ -6,7 +6,7 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <vector>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -157,26 +157,49 @@ int removeTemporaryLeftovers(const std::string& directory) {
   return removed;
 }
 
-std::string readFile(const std::string& path) {
+namespace {
+
+const char* fileKind(mode_t mode) {
+  return S_ISDIR(mode) ? "a directory" : S_ISCHR(mode) ? "a character device" : S_ISBLK(mode) ? "a block device"
+         : S_ISSOCK(mode) ? "a socket" : "not a regular file";
+}
+
+[[noreturn]] void tooLarge(const std::string& path, std::uint64_t size, std::uint64_t max_bytes, bool at_least) {
+  fail("INPUT_TOO_LARGE", path, std::string("is ") + (at_least ? "more than " : "") + std::to_string(size) +
+                                    " bytes; rigbake reads at most " + std::to_string(max_bytes) + " bytes of such a file");
+}
+
+}  // namespace
+
+std::string readFile(const std::string& path, std::uint64_t max_bytes) {
+  struct stat status {};
+  if (::stat(path.c_str(), &status) != 0) fail("IO_FILE_NOT_FOUND", path, "no such file or it cannot be opened");
+  if (!S_ISREG(status.st_mode) && !S_ISFIFO(status.st_mode))
+    fail("IO_INPUT_NOT_REGULAR", path, std::string("is ") + fileKind(status.st_mode) + ", not a file to read");
+  if (S_ISREG(status.st_mode) && static_cast<std::uint64_t>(status.st_size) > max_bytes)
+    tooLarge(path, static_cast<std::uint64_t>(status.st_size), max_bytes, false);
   std::ifstream in(path, std::ios::binary);
   if (!in) fail("IO_FILE_NOT_FOUND", path, "no such file or it cannot be opened");
   // Read at the size the file has (one allocation, one copy): through an ostringstream the bytes were
   // copied twice and the buffer grew by doubling, most of the time of loading a 10 MB GLB.
   std::string bytes;
-  struct stat status {};
-  if (::stat(path.c_str(), &status) == 0 && S_ISREG(status.st_mode) && status.st_size > 0) {
+  if (S_ISREG(status.st_mode) && status.st_size > 0) {
     bytes.resize(static_cast<size_t>(status.st_size));
     in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     bytes.resize(static_cast<size_t>(in.gcount()));
     if (in.bad()) fail("IO_FILE_NOT_FOUND", path, "read error");
     if (in.eof()) return bytes;  // the file shrank while being read
   }
-  // Whatever is left (or all of it, for a pipe or a file that grew).
-  std::ostringstream rest;
+  // Whatever is left (or all of it, for a pipe or a file that grew), never more than max_bytes.
   in.clear();
-  rest << in.rdbuf();
+  std::vector<char> chunk(1 << 16);
+  while (true) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    bytes.append(chunk.data(), static_cast<size_t>(in.gcount()));
+    if (bytes.size() > max_bytes) tooLarge(path, max_bytes, max_bytes, true);
+    if (!in) break;
+  }
   if (in.bad()) fail("IO_FILE_NOT_FOUND", path, "read error");
-  bytes += rest.str();
   return bytes;
 }
 

@@ -3,6 +3,7 @@
 // command with several outputs commits them together (OutputBatch), so a failure leaves none of them.
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,7 +64,14 @@ class FolderLock {
 // there (hold an exclusive FolderLock).
 int removeTemporaryLeftovers(const std::string& directory);
 
-// Reads a whole file; throws Error IO_FILE_NOT_FOUND naming `path` when it cannot.
-std::string readFile(const std::string& path);
+// The most rigbake reads of one input (docs/errors.md, INPUT_TOO_LARGE): a glTF, GLB or VRM (or any
+// binary input), and a JSON file (preset, map, muscle file, manifest, config, hits).
+inline constexpr std::uint64_t kMaxModelBytes = std::uint64_t{2} << 30;  // 2 GiB
+inline constexpr std::uint64_t kMaxJsonBytes = std::uint64_t{64} << 20;  // 64 MiB
+
+// Reads a whole file: a regular file, or a FIFO or pipe (`<(...)`), read up to `max_bytes`. Throws Error
+// IO_FILE_NOT_FOUND naming `path` when it cannot be opened, IO_INPUT_NOT_REGULAR for a device (/dev/zero
+// would be read until memory runs out), socket or directory, INPUT_TOO_LARGE past `max_bytes`.
+std::string readFile(const std::string& path, std::uint64_t max_bytes = kMaxModelBytes);
 
 }  // namespace rigbake

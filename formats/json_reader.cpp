@@ -11,7 +11,7 @@
 namespace rigbake {
 
 nlohmann::json readJsonFile(const std::string& path) {
-  std::string text = readFile(path);
+  std::string text = readFile(path, kMaxJsonBytes);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {

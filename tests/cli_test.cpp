@@ -4,6 +4,7 @@
 #include <sys/sysmacros.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
 #include <set>
@@ -408,6 +409,45 @@ TEST_CASE("cli: an empty output path is USAGE, not a file with no name") {
     CHECK(lineCount(run.err) == 1);
     CHECK(run.err.rfind("USAGE -o:", 0) == 0);
   }
+}
+
+TEST_CASE("cli: a device as an input is one line at once, an input past its limit is INPUT_TOO_LARGE, a pipe is read") {
+  // Before issue 34, /dev/zero as any input grew memory until the run was killed or ended INTERNAL.
+  TempDir dir;
+  const std::string sample = ext::shellQuote(sampleGlbPathForCli());
+  const std::vector<std::string> device_inputs = {
+      "bake /dev/zero -o " + (dir / "a.glb"),
+      "place " + sample + " --preset /dev/zero -o " + (dir / "m.json"),
+      "bake " + sample + " --muscles /dev/zero -o " + (dir / "a.glb"),
+      "landmarks " + sample + " --map /dev/zero",
+  };
+  for (const std::string& args : device_inputs) {
+    const auto start = std::chrono::steady_clock::now();
+    const CliResult run = runCli(args);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    INFO(args << "\n" << run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_INPUT_NOT_REGULAR /dev/zero: is a character device", 0) == 0);
+    CHECK(seconds < 3.0);
+  }
+  // A 65 MiB muscle file (sparse: no disk is spent) is past the 64 MiB a JSON input may have.
+  { std::ofstream(dir / "huge.json") << "{"; }
+  std::filesystem::resize_file(dir / "huge.json", (std::uintmax_t{65} << 20));
+  const CliResult huge = runCli("bake " + sample + " --muscles " + (dir / "huge.json") + " -o " + (dir / "a.glb"));
+  INFO(huge.err);
+  CHECK(huge.exit_code == 3);
+  CHECK(lineCount(huge.err) == 1);
+  CHECK(huge.err.rfind("INPUT_TOO_LARGE " + (dir / "huge.json") + ": is 68157440 bytes", 0) == 0);
+  CHECK(namesIn(dir.path.string()) == std::set<std::string>{"huge.json"});
+  // A preset through a pipe is still read, up to the same limit.
+  const std::string preset = ext::shellQuote(sourceDir() + "/presets/muscles/gow_biped.json");
+  REQUIRE(runCli("place " + sample + " --preset " + preset + " -o " + (dir / "by_path.json")).exit_code == 0);
+  const ext::CommandResult piped = ext::runCommand("cat " + preset + " | " + std::string(RIGBAKE_CLI) + " place " + sample +
+                                                   " --preset /dev/stdin -o " + (dir / "by_pipe.json") + " 2>&1");
+  INFO(piped.output);
+  CHECK(piped.exit_code == 0);
+  CHECK(slurp(dir / "by_pipe.json") == slurp(dir / "by_path.json"));
 }
 
 namespace {
