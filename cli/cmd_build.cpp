@@ -116,7 +116,15 @@ int run(const BuildCommandOptions& options) {
     fail("BUILD_OUTPUT_LOCKED", manifest.out, "another rigbake build is writing into this folder (it holds " +
                                                   manifest.out + "/.rigbake-lock); wait for it to finish");
   // Temporary files of runs killed before their renames; only now, with no other build writing here.
-  if (exclusive) removeTemporaryLeftovers(manifest.out);
+  if (exclusive) {
+    std::vector<std::string> outputs = {manifest.out + "/summary.json", manifest.out + "/summary.junit.xml"};
+    for (const BuildCharacter& character : manifest.characters) {
+      const CharacterOutputs out = characterOutputs(manifest, character);
+      for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html, out.stamp})
+        outputs.push_back(path);
+    }
+    removeTemporaryLeftovers(outputs);
+  }
 
   if (options.summary_only) {
     std::vector<JobOutcome> outcomes;

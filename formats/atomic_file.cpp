@@ -137,23 +137,22 @@ bool FolderLock::tryLock(const std::string& directory, bool exclusive) {
   return true;
 }
 
-int removeTemporaryLeftovers(const std::string& directory) {
+int removeTemporaryLeftovers(const std::vector<std::string>& outputs) {
   namespace fs = std::filesystem;
   int removed = 0;
-  auto sweep = [&](const fs::path& folder, auto& self, int depth) -> void {
+  for (const std::string& output : outputs) {
+    const fs::path path(output);
+    const std::string prefix = path.filename().string() + kTempFileMarker;
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
     std::error_code error;
     for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
       const std::string name = it->path().filename().string();
-      std::error_code type_error;
-      if (name.find(kTempFileMarker) != std::string::npos && !it->is_directory(type_error)) {
-        std::error_code remove_error;
-        removed += fs::remove(it->path(), remove_error) ? 1 : 0;
-      } else if (depth > 0 && it->is_directory(type_error) && !it->is_symlink(type_error)) {
-        self(it->path(), self, depth - 1);
-      }
+      // mkstemp's six characters follow the marker: OUTPUT.rigbake-tmp-XXXXXX and nothing else.
+      if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
+      std::error_code type_error, remove_error;
+      if (it->is_regular_file(type_error) && fs::remove(it->path(), remove_error)) ++removed;
     }
-  };
-  sweep(directory, sweep, 1);
+  }
   return removed;
 }
 

@@ -59,10 +59,11 @@ class FolderLock {
   int fd_ = -1;
 };
 
-// Removes the temporary files (names holding kTempFileMarker) that a killed run left in `directory`
-// and in its subdirectories one level down; returns how many. Only safe while no other rigbake writes
-// there (hold an exclusive FolderLock).
-int removeTemporaryLeftovers(const std::string& directory);
+// Removes the temporary files a killed run left beside any of `outputs` (OUTPUT.rigbake-tmp-XXXXXX);
+// returns how many. Only the temporaries of these outputs: another program's (a `rigbake bake` into the
+// same folder) are not touched. Only safe while no other run writes these outputs (hold an exclusive
+// FolderLock).
+int removeTemporaryLeftovers(const std::vector<std::string>& outputs);
 
 // The most rigbake reads of one input (docs/errors.md, INPUT_TOO_LARGE): a glTF, GLB or VRM (or any
 // binary input), and a JSON file (preset, map, muscle file, manifest, config, hits).

@@ -376,11 +376,15 @@ TEST_CASE("cli build: temporary files a killed run left in the output folder are
   const std::vector<std::string> leftovers = {"p/out/summary.json.rigbake-tmp-Ab12Cd", "p/out/sample/sample.glb.rigbake-tmp-x9Y8z7"};
   for (const std::string& leftover : leftovers) std::ofstream(dir / leftover) << "half a file";
   std::ofstream(dir / "p/out/sample/notes.txt") << "mine";
+  // Another program's temporary file (a `rigbake bake -o` into the same folder, running now) is not the
+  // build's to remove.
+  std::ofstream(dir / "p/out/sample/other.glb.rigbake-tmp-Qr5St6") << "being written";
   const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
   INFO(run.err);
   CHECK(run.exit_code == 0);
   for (const std::string& leftover : leftovers) CHECK(!fs::exists(dir / leftover));
   CHECK(slurp(dir / "p/out/sample/notes.txt") == "mine");
+  CHECK(slurp(dir / "p/out/sample/other.glb.rigbake-tmp-Qr5St6") == "being written");
 }
 
 TEST_CASE("cli build: file-system problems are IO_* lines naming the path, never INTERNAL") {
