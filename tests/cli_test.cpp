@@ -385,6 +385,12 @@ TEST_CASE("cli: an output that is a device, a FIFO or a directory is refused bef
     CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
     CHECK(std::filesystem::is_empty(folder));
   }
+  // /proc/self/fd/1 when stdout is a pipe: a link whose text names nothing, to something not a file.
+  const ext::CommandResult piped =
+      ext::runCommand("cd " + ext::shellQuote(dir.path.string()) + " && " + std::string(RIGBAKE_CLI) + " sample -o /proc/self/fd/1 2>&1 | cat");
+  INFO(piped.output);
+  CHECK(piped.output.rfind("IO_OUTPUT_NOT_REGULAR /proc/self/fd/1: exists and is a FIFO", 0) == 0);
+  CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
 }
 
 TEST_CASE("cli: an output that is a symbolic link writes the file it names and keeps the link") {
