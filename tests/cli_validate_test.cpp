@@ -243,3 +243,17 @@ TEST_CASE("cli validate: a report path that is a FIFO is refused before any work
   CHECK(empty.exit_code == 1);
   CHECK(empty.err.rfind("USAGE --report:", 0) == 0);
 }
+
+TEST_CASE("cli validate: a report folder the run created is gone again when its reports cannot be written") {
+  // A full disk, played by a file size limit: write() fails with EFBIG (SIGXFSZ ignored, or it kills).
+  test::TempDir dir;
+  const std::string reports = dir / "new/reports";
+  const ext::CommandResult run = ext::runCommand("ulimit -f 8 && trap '' XFSZ && " + std::string(RIGBAKE_CLI) + " validate " +
+                                                 ext::shellQuote(cliBake().glb) + " --no-pictures --report " +
+                                                 ext::shellQuote(reports) + " 2>&1");
+  INFO(run.output);
+  CHECK(run.exit_code == 2);
+  CHECK(run.output.rfind("IO_WRITE_FAILED " + reports + "/report.", 0) == 0);
+  CHECK(run.output.find("File too large") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir / "new"));
+}
