@@ -35,6 +35,11 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"VIEW_BAKE_INVALID", ExitCode::kInvalidInput, "A baked file's RIGBAKE_muscle_rig extension or packed influence attributes are malformed, so the player cannot run it."},
       {"FBX_PARSE_FAILED", ExitCode::kInvalidInput, "The file is not a readable FBX (Assimp cannot import it: truncation, damage, not FBX) or uses a left-handed axis system."},
       {"VIEW_RIG_STRIPPED", ExitCode::kInvalidInput, "A baked file's muscle joints have neither the RIGBAKE_muscle_rig extension nor channels: a tool stripped the rig, so the player would show muscles that never move."},
+      {"IO_OUTPUT_NOT_REGULAR", ExitCode::kIo, "An output path exists and is not a regular file (a device, FIFO, socket or directory), so it is not replaced."},
+      {"BUILD_OUTPUT_LOCKED", ExitCode::kIo, "Another rigbake build is writing into the same output folder (it holds OUT/.rigbake-lock)."},
+      {"BUILD_SOURCE_FAILED", ExitCode::kChecksFailed, "A build character's muscles_from source failed, so it could not be built (the run ends BUILD_FAILED)."},
+      {"IO_INPUT_NOT_REGULAR", ExitCode::kIo, "An input path is a device, socket or directory, not a file to read (a FIFO or pipe is read)."},
+      {"INPUT_TOO_LARGE", ExitCode::kInvalidInput, "An input file is larger than rigbake reads of its kind (2 GiB for a glTF, GLB or VRM, 64 MiB for JSON)."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };
   return kCodes;

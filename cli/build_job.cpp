@@ -101,12 +101,32 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
   return failed;
 }
 
+// The content hash of the character's five outputs as they are on disk, or "" when one is missing or
+// unreadable. The stamp records it, so that outputs replaced after the stamp was written (by a run
+// killed between its renames, another build into the same folder, a hand edit) are never up to date.
+std::string outputsHash(const CharacterOutputs& out) {
+  try {
+    return contentHash({out.model, out.muscles, out.report_json, out.report_junit, out.report_html}, "outputs");
+  } catch (const Error&) {
+    return "";
+  }
+}
+
 void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobOutcome& outcome) {
   nlohmann::json stamp = {{"hash", hash},
+                          {"outputs", outcome.status == JobStatus::kFailed ? std::string() : outputsHash(out)},
                           {"status", jobStatusName(outcome.status)},
                           {"error", outcome.error},
                           {"checks_failed", outcome.checks_failed}};
   writeFileAtomically(out.stamp, jsonText(stamp) + "\n");
+}
+
+// A rebuild first removes the stamp, so that a run killed after replacing any output leaves no stamp that
+// calls the mix up to date.
+void removeStamp(const CharacterOutputs& out) {
+  std::error_code error;
+  std::filesystem::remove(out.stamp, error);
+  if (error) fail("IO_WRITE_FAILED", out.stamp, "cannot remove the previous build stamp: " + error.message());
 }
 
 }  // namespace
@@ -148,15 +168,17 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     if (!force) {
       const nlohmann::json stamp = readStamp(out.stamp);
       JobOutcome previous = outcomeFromStamp(character, out.stamp, stamp);
-      bool outputs_exist = true;
-      for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html})
-        outputs_exist &= std::filesystem::exists(path);
-      if (stamp.is_object() && stamp.value("hash", "") == hash && previous.status != JobStatus::kFailed && outputs_exist) {
-        previous.status = JobStatus::kUpToDate;
-        return previous;
+      // Up to date only when the inputs are those stamped and so are the outputs, byte for byte.
+      if (stamp.is_object() && stamp.value("hash", "") == hash && previous.status != JobStatus::kFailed) {
+        const std::string outputs = outputsHash(out);
+        if (!outputs.empty() && stamp.value("outputs", "") == outputs) {
+          previous.status = JobStatus::kUpToDate;
+          return previous;
+        }
       }
     }
-    std::filesystem::create_directories(out.directory);
+    createDirectories(out.directory);
+    removeStamp(out);
     MusclePreset preset = readMusclePreset(character.preset);
     Loaded loaded = loadResolved(character.input, presets);
     const Character& body = loaded.character.character;
@@ -189,8 +211,10 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     BakeResult bake = bakeCharacter(body, muscles, options);
     const BakedFile file = writeBakedFile(*loaded.character.document, body, bake, true, {});
     // The muscles as baked (carriers chosen, response fitted): what a retarget of this cast carries on.
-    writeFileAtomically(out.muscles, muscleJson(bake.muscles, body.skeleton, preset.name));
-    writeFileAtomically(out.model, file.bytes);
+    OutputBatch outputs;
+    outputs.add(out.muscles, muscleJson(bake.muscles, body.skeleton, preset.name));
+    outputs.add(out.model, file.bytes);
+    outputs.commit();
     JobOutcome outcome;
     outcome.name = character.name;
     outcome.status = JobStatus::kBuilt;
@@ -200,7 +224,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
   } catch (const Error& error) {
     JobOutcome outcome = failedJob(character, error.what());
     try {
-      std::filesystem::create_directories(out.directory);
+      createDirectories(out.directory);
       writeStamp(out, hash, outcome);
     } catch (const std::exception&) {
       // The failure itself is what the summary reports; a missing stamp only means a rebuild next time.

@@ -118,6 +118,10 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
 }
 
 int run(const BakeCommandOptions& options) {
+  checkOutputOptions({{"-o", options.output, true},
+                      {"--packed-out", options.packed_output, false},
+                      {"--stats", options.stats_output, false},
+                      {"--muscles-out", options.muscles_output, false}});
   ProgressLine progress("rigbake bake", options.progress);
   progress.show("loading the character");
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
@@ -177,11 +181,14 @@ int run(const BakeCommandOptions& options) {
                               {"muscle_motion", muscleMotionName(bake.motion)}};
   std::vector<PackedInfluences> packed;
   for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
-  writeFileAtomically(options.output, file.bytes);
-  if (!options.packed_output.empty()) writePackedFile(options.packed_output, packed);
-  if (!options.stats_output.empty()) writeFileAtomically(options.stats_output, jsonText(stats) + "\n");
+  // All the outputs or none: a --stats that cannot be written must not leave a new -o behind.
+  OutputBatch outputs;
+  outputs.add(options.output, file.bytes);
+  if (!options.packed_output.empty()) outputs.add(options.packed_output, encodePackedFile(packed));
+  if (!options.stats_output.empty()) outputs.add(options.stats_output, jsonText(stats) + "\n");
   if (!options.muscles_output.empty())
-    writeFileAtomically(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
+    outputs.add(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
+  outputs.commit();
 
   progress.clear();
   if (options.json) std::cout << jsonText(stats) << "\n";

@@ -29,6 +29,7 @@ struct BuildCommandOptions {
   std::string manifest;
   int jobs = 0;
   std::string emit_ninja;
+  bool emit_ninja_given = false;  // --emit-ninja '' must not mean "build"
   std::string shard;
   std::string character;
   bool summary_only = false;
@@ -65,10 +66,19 @@ void writeSummary(const BuildManifest& manifest, const std::vector<JobOutcome>& 
                           "\" errors=\"0\" skipped=\"0\">\n" + cases + "</testsuite>\n");
 }
 
+// A character whose muscles_from source failed fails too; its line has a code like every failure.
+JobOutcome sourceFailed(const BuildManifest& manifest, const BuildCharacter& character) {
+  const Error error("BUILD_SOURCE_FAILED", manifest.file + "#" + character.pointer + "/muscles_from",
+                    "muscles_from character '" + character.muscles_from + "' failed");
+  return failedJob(character, error.what());
+}
+
 int run(const BuildCommandOptions& options) {
   const std::string presets_dir = presetsDirectory(options.presets);
+  if (options.emit_ninja_given && options.emit_ninja.empty()) fail("USAGE", "--emit-ninja", "names no file (an empty path)");
+  if (options.emit_ninja_given) checkOutputPath(options.emit_ninja);
   BuildManifest manifest = readBuildManifest(options.manifest, presets_dir);
-  if (!options.emit_ninja.empty()) {
+  if (options.emit_ninja_given) {
     std::string self = std::filesystem::canonical("/proc/self/exe").string();
     writeFileAtomically(options.emit_ninja, ninjaFile(manifest, self, std::filesystem::absolute(options.manifest).string()));
     std::cerr << "wrote " << options.emit_ninja << ": " << manifest.characters.size() << " character edges\n";
@@ -96,6 +106,26 @@ int run(const BuildCommandOptions& options) {
   if (!options.character.empty() && selected.empty())
     fail("USAGE", "--character", "no character named '" + options.character + "' in " + options.manifest);
 
+  // One build at a time per output folder: two with different options interleaved their outputs. The
+  // edges of an --emit-ninja graph (--character) write disjoint folders, so they share the lock; a whole
+  // build, a shard or the summary takes it alone.
+  createDirectories(manifest.out);
+  const bool exclusive = options.character.empty();
+  FolderLock lock;
+  if (!lock.tryLock(manifest.out, exclusive))
+    fail("BUILD_OUTPUT_LOCKED", manifest.out, "another rigbake build is writing into this folder (it holds " +
+                                                  manifest.out + "/.rigbake-lock); wait for it to finish");
+  // Temporary files of runs killed before their renames; only now, with no other build writing here.
+  if (exclusive) {
+    std::vector<std::string> outputs = {manifest.out + "/summary.json", manifest.out + "/summary.junit.xml"};
+    for (const BuildCharacter& character : manifest.characters) {
+      const CharacterOutputs out = characterOutputs(manifest, character);
+      for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html, out.stamp})
+        outputs.push_back(path);
+    }
+    removeTemporaryLeftovers(outputs);
+  }
+
   if (options.summary_only) {
     std::vector<JobOutcome> outcomes;
     for (size_t i = 0; i < manifest.characters.size(); ++i) outcomes.push_back(readJobOutcome(manifest, manifest.characters[i]));
@@ -104,7 +134,6 @@ int run(const BuildCommandOptions& options) {
   }
 
   SharedPresets shared = loadSharedPresets(presets_dir);
-  std::filesystem::create_directories(manifest.out);
   const int jobs = options.jobs > 0 ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
   // The cores the characters running at once leave each bake (its outputs are the same at any count).
   const int workers = std::max(1, std::min<int>(jobs, static_cast<int>(selected.size())));
@@ -157,7 +186,7 @@ int run(const BuildCommandOptions& options) {
       showRunning();
       lock.unlock();
       auto start = std::chrono::steady_clock::now();
-      JobOutcome outcome = source_failed ? failedJob(character, "muscles_from character '" + character.muscles_from + "' failed")
+      JobOutcome outcome = source_failed ? sourceFailed(manifest, character)
                                          : runCharacterJob(manifest, character, shared, options.force, bake_threads);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
@@ -211,7 +240,8 @@ void addBuildCommand(CLI::App& app, Runner* runner) {
       "failures and names them all at the end (exit 1).");
   command->add_option("manifest", options->manifest, "Build manifest (JSON)")->required();
   command->add_option("-j,--jobs", options->jobs, "Characters built at once (default: one per core)")->check(CLI::NonNegativeNumber);
-  command->add_option("--emit-ninja", options->emit_ninja, "Write a Ninja file with one edge per character instead of building");
+  CLI::Option* emit_ninja =
+      command->add_option("--emit-ninja", options->emit_ninja, "Write a Ninja file with one edge per character instead of building");
   command->add_option("--shard", options->shard, "Build only slice I of N (e.g. 0/4) for CI matrix jobs; deterministic");
   command->add_option("--character", options->character, "Build only this character (what the Ninja edges run)");
   command->add_flag("--summary-only", options->summary_only, "Only gather the characters' results into the summary");
@@ -219,7 +249,10 @@ void addBuildCommand(CLI::App& app, Runner* runner) {
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print each character's status as JSON on stdout");
   addProgressOption(command, &options->progress);
-  command->callback([runner, options]() { *runner = [options]() { return run(*options); }; });
+  command->callback([runner, options, emit_ninja]() {
+    options->emit_ninja_given = emit_ninja->count() > 0;
+    *runner = [options]() { return run(*options); };
+  });
 }
 
 }  // namespace rigbake::cli

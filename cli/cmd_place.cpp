@@ -23,6 +23,7 @@ struct PlaceOptions {
 };
 
 int run(const PlaceOptions& options) {
+  checkOutputOptions({{"-o", options.output, true}});
   Sides sides = options.side == "left" ? Sides::kLeft : options.side == "right" ? Sides::kRight : Sides::kBoth;
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);

@@ -26,6 +26,7 @@ struct RetargetOptions {
 };
 
 int run(const RetargetOptions& options) {
+  checkOutputOptions({{"-o", options.output, true}});
   PresetOptions src_presets{options.presets_dir, options.map_from};
   PresetOptions dst_presets{options.presets_dir, options.map_to};
   MusclePreset preset = loadMusclePreset(src_presets, options.preset);

@@ -26,6 +26,7 @@ struct RomCommandOptions {
 };
 
 int run(const RomCommandOptions& options) {
+  checkOutputOptions({{"-o", options.output, true}});
   const std::vector<std::string> only = splitClipNames(options.clips, "--clips");
   const RomPreset preset = loadRomPreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);

@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "anatomy/sample_character.h"
+#include "cli/common.h"
 #include "cli/commands.h"
 #include "formats/sample_gltf.h"
 
@@ -18,6 +19,7 @@ struct SampleCommandOptions {
 };
 
 int runSample(const SampleCommandOptions& options) {
+  checkOutputOptions({{"-o", options.output, true}});
   SampleOptions sample;
   sample.target_vertices = options.vertices;
   sample.vrm = options.vrm == 0 ? SampleVrm::kVrm0 : options.vrm == 1 ? SampleVrm::kVrm1 : SampleVrm::kNone;

@@ -33,6 +33,9 @@ struct ValidateCommandOptions {
 };
 
 int run(const ValidateCommandOptions& options) {
+  if (options.report_dir.empty()) fail("USAGE", "--report", "names no directory (an empty path)");
+  const ReportPaths paths = reportPathsIn(options.report_dir);
+  checkOutputOptions({{"--report", paths.json, true}, {"--report", paths.junit, true}, {"--report", paths.html, true}});
   ProgressLine progress("rigbake validate", options.progress);
   ValidationRequest request;
   request.baked = options.baked;
@@ -48,7 +51,7 @@ int run(const ValidateCommandOptions& options) {
   request.threads = options.threads;
   const Report report = validateBakedFile(request);
   progress.show("writing the reports");
-  writeReports(report, reportPathsIn(options.report_dir), options.threads);
+  writeReports(report, paths, options.threads);
   progress.clear();
   const std::string character_name = fileNameOf(options.baked);
 

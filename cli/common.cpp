@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "anatomy/error.h"
+#include "formats/atomic_file.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
 
@@ -125,6 +126,16 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   for (const std::string& note : resolved.loaded.notes) std::cerr << printableLine("note " + path + ": " + note) << "\n";
   resolved.landmarks = resolveLandmarks(resolved.loaded.character, inputs);
   return resolved;
+}
+
+void checkOutputOptions(std::initializer_list<OutputOption> outputs) {
+  for (const OutputOption& output : outputs) {
+    if (output.path.empty()) {
+      if (output.required) fail("USAGE", output.option, "names no file (an empty path)");
+      continue;
+    }
+    checkOutputPath(output.path);
+  }
 }
 
 std::string fileNameOf(const std::string& path) {

@@ -37,6 +37,15 @@ std::vector<std::string> splitClipNames(const std::string& list, const std::stri
 // keys, range and peak, per side the axis, the rest angle and the joints keyed; and the skipped clips.
 nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton);
 
+// An output named on the command line, checked before any work: a required one may not be empty (USAGE),
+// and none may be an existing device, FIFO, socket or directory (IO_OUTPUT_NOT_REGULAR).
+struct OutputOption {
+  const char* option;
+  const std::string& path;
+  bool required;
+};
+void checkOutputOptions(std::initializer_list<OutputOption> outputs);
+
 struct ResolvedCharacter {
   LoadedCharacter loaded;
   LandmarkSet landmarks;

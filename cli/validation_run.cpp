@@ -140,15 +140,35 @@ void writeReports(const Report& report, const ReportPaths& paths, int threads) {
   const std::string json = reportJson(report);
   const std::string junit = reportJunit({report});
   const std::string html = reportHtml(report, threads);
+  // The folders this run creates, deepest first: a failed run takes them away again (it writes nothing).
+  std::vector<std::filesystem::path> created;
+  auto removeCreated = [&created]() {
+    std::error_code ignored;
+    for (const std::filesystem::path& folder : created) std::filesystem::remove(folder, ignored);  // only if empty
+  };
   for (const std::string& path : {paths.json, paths.junit, paths.html}) {
     std::error_code error;
     std::filesystem::path parent = std::filesystem::path(path).parent_path();
+    for (std::filesystem::path p = parent; !p.empty() && !std::filesystem::exists(p, error); p = p.parent_path())
+      created.push_back(p);
     if (!parent.empty()) std::filesystem::create_directories(parent, error);
-    if (error) fail("IO_WRITE_FAILED", parent.string(), "cannot create the report directory: " + error.message());
+    if (error) {
+      removeCreated();
+      fail("IO_WRITE_FAILED", parent.string(), "cannot create the report directory: " + error.message());
+    }
   }
-  writeFileAtomically(paths.json, json);
-  writeFileAtomically(paths.junit, junit);
-  writeFileAtomically(paths.html, html);
+  // The three or none: a report.html that cannot be written must not leave a new report.json that says
+  // the opposite of the old report.html.
+  OutputBatch outputs;
+  outputs.add(paths.json, json);
+  outputs.add(paths.junit, junit);
+  outputs.add(paths.html, html);
+  try {
+    outputs.commit();
+  } catch (...) {
+    removeCreated();
+    throw;
+  }
 }
 
 }  // namespace rigbake::cli

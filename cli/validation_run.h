@@ -27,7 +27,7 @@ struct ValidationRequest {
 
 Report validateBakedFile(const ValidationRequest& request);
 
-// Renders all three reports first, then writes each atomically, so a failure leaves no partial set.
+// Renders all three reports first, then commits them as one OutputBatch, so a failure leaves none.
 struct ReportPaths {
   std::string json, junit, html;
 };

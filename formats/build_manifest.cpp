@@ -43,6 +43,23 @@ std::vector<std::string> referencedFiles(const std::string& gltf_path) {
   return files;
 }
 
+// A name becomes a folder, a file NAME.glb (with its temporary twin NAME.glb.rigbake-tmp-XXXXXX, under
+// the file systems' 255-byte limit) and a word of every progress line: short, one line, printable.
+constexpr size_t kMaxNameBytes = 128;
+
+void checkNameText(const JsonReader& value, const std::string& name) {
+  if (name.size() > kMaxNameBytes)
+    value.fail("is " + std::to_string(name.size()) + " bytes long; a name has at most " + std::to_string(kMaxNameBytes));
+  for (size_t i = 0; i < name.size();) {
+    const unsigned char c = static_cast<unsigned char>(name[i]);
+    const size_t length = utf8SequenceAt(name, i);
+    if (length == 0 || c < 0x20 || c == 0x7F)
+      value.fail("holds a control character or a byte that is not UTF-8 at byte " + std::to_string(i) +
+                 "; a name is printable text on one line");
+    i += length;
+  }
+}
+
 }  // namespace
 
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
@@ -98,7 +115,12 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   if (in.has("muscle_motion")) manifest.muscle_motion = motionOf(in.at("muscle_motion"));
   if (in.has("helper_joints")) manifest.helper_joints = in.at("helper_joints").asBool();
   if (in.has("response")) manifest.response = responseOf(in.at("response"));
-  manifest.out = resolve(manifest.directory, in.has("out") ? in.at("out").asString() : std::string("build"));
+  auto outOf = [](const JsonReader& value) {
+    std::string out = value.asString();
+    if (out.empty()) value.fail("must name the output folder (it is empty)");
+    return out;
+  };
+  manifest.out = resolve(manifest.directory, in.has("out") ? outOf(in.at("out")) : std::string("build"));
   JsonReader characters = in.at("characters");
   if (characters.arraySize() == 0) characters.fail("must list at least one character");
   std::set<std::string> names;
@@ -111,9 +133,13 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.name = item.at("name").asString();
     if (c.name.empty() || c.name.find_first_of("/\\ \t:$") != std::string::npos || c.name[0] == '.')
       item.at("name").fail("must be a plain file name (no slashes, spaces, ':' or '$', not starting with '.')");
+    checkNameText(item.at("name"), c.name);
     if (!names.insert(c.name).second) item.at("name").fail("duplicate character name '" + c.name + "'");
     c.input = resolve(manifest.directory, item.at("input").asString());
-    if (item.has("muscles_from")) c.muscles_from = item.at("muscles_from").asString();
+    if (item.has("muscles_from")) {
+      c.muscles_from = item.at("muscles_from").asString();
+      checkNameText(item.at("muscles_from"), c.muscles_from);
+    }
     if (item.has("muscles")) c.muscles = resolve(manifest.directory, item.at("muscles").asString());
     if (!c.muscles.empty() && !c.muscles_from.empty())
       item.fail("give either muscles or muscles_from, not both");

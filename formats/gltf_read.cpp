@@ -194,6 +194,11 @@ Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const
       if (std::abs(inverse_bind.determinant()) < 1e-30)
         fail("GLTF_SKIN_INVALID", where, skin_where + "/inverseBindMatrices/" + std::to_string(k) + " is singular");
       bind[node] = skin_to_world[s] * Eigen::Affine3d(inverse_bind.inverse());
+      // A zero scale on a node above the skin (or a huge one) collapses or overflows the bind transform;
+      // the pose code splits it into a rotation and a scale and needs every axis to have a length.
+      if (!bind[node].matrix().allFinite() || !(std::abs(bind[node].linear().determinant()) >= 1e-30))
+        fail("GLTF_SKIN_INVALID", where, skin_where + "/joints/" + std::to_string(k) +
+                                             ": its bind transform (inverse bind matrix and the nodes above the skin) is degenerate");
     }
   }
   *skin_placement = skin_to_world;

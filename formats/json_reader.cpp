@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 
 #include "anatomy/error.h"
 #include "formats/atomic_file.h"
@@ -9,7 +11,7 @@
 namespace rigbake {
 
 nlohmann::json readJsonFile(const std::string& path) {
-  std::string text = readFile(path);
+  std::string text = readFile(path, kMaxJsonBytes);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
@@ -89,6 +91,20 @@ double JsonReader::asNumber() const {
   if (!value_.is_number()) fail("must be a number");
   double number = value_.get<double>();
   if (!std::isfinite(number)) fail("must be a finite number");
+  return number;
+}
+
+double JsonReader::asNumberIn(double min, double max, const std::string& unit) const {
+  const double number = asNumber();
+  if (number < min || number > max) {
+    auto text = [](double value) {
+      std::ostringstream out;
+      out << std::setprecision(6) << value;
+      return out.str();
+    };
+    const std::string suffix = unit.empty() ? "" : " " + unit;
+    fail("must be between " + text(min) + suffix + " and " + text(max) + suffix + " (got " + text(number) + ")");
+  }
   return number;
 }
 

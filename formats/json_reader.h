@@ -32,6 +32,9 @@ class JsonReader {
 
   std::string asString() const;
   double asNumber() const;
+  // A finite number in [min, max]; fails naming the range (in `unit`, e.g. "m") otherwise, so that an
+  // absurd value (1e300) never reaches geometry.
+  double asNumberIn(double min, double max, const std::string& unit = "") const;
   int asInt() const;
   bool asBool() const;
   std::vector<std::string> asStringList() const;  // a string or an array of strings

@@ -1,7 +1,9 @@
 #include "formats/muscle_json.h"
 
 #include <algorithm>
+#include <iomanip>
 #include <map>
+#include <sstream>
 #include <tuple>
 #include <nlohmann/json.hpp>
 
@@ -24,6 +26,24 @@ Eigen::Vector3d readVector(const JsonReader& in) {
   return {in.at(0).asNumber(), in.at(1).asNumber(), in.at(2).asNumber()};
 }
 
+// Every length in a muscle file reaches the bake's geometry (joint matrices, weights, the extension): a
+// locator 1e300 m away made NaN inverse bind matrices. No muscle of a body lies further than this many
+// body heights from the scene's origin, or bulges further (docs/muscle-json.md).
+constexpr double kMaxBodyHeights = 100.0;
+
+// The bound for a character `body_height` tall, in metres.
+double maxReach(double body_height) { return kMaxBodyHeights * std::max(body_height, 1e-3); }
+
+// A world position within maxReach of the origin; fails naming the pointer otherwise.
+void requireWithinReach(const JsonReader& in, const Eigen::Vector3d& world, double body_height) {
+  if (!(world.norm() <= maxReach(body_height))) {
+    std::ostringstream text;
+    text << std::setprecision(6) << "puts the point " << world.norm() << " m from the origin; a muscle lies within "
+         << kMaxBodyHeights << " body heights (" << maxReach(body_height) << " m)";
+    in.fail(text.str());
+  }
+}
+
 const char* kMusclesCode = "MUSCLES_INVALID";
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
@@ -39,23 +59,30 @@ nlohmann::json responseJson(const MuscleResponse& response) {
   return out;
 }
 
-std::vector<ResponseKey> readCurve(const JsonReader& in, double at_unit) {
+// Curve keys: `at` a length ratio (0 to kMaxRatio) or a twist in degrees (within kMaxTwistDeg either
+// way), the bulge within maxReach, the scale positive and at most kMaxScale.
+constexpr double kMaxRatio = 100.0, kMaxTwistDeg = 3600.0, kMaxScale = 100.0;
+
+std::vector<ResponseKey> readCurve(const JsonReader& in, double at_unit, double body_height) {
   std::vector<ResponseKey> keys;
+  const double reach = maxReach(body_height);
   for (size_t k = 0; k < in.arraySize(); ++k) {
     JsonReader key = in.at(k);
     key.allowKeys({"at", "bulge", "scale"});
     JsonReader bulge = key.at("bulge");
     if (bulge.arraySize() != 2) bulge.fail("must be [up, side] in metres");
-    keys.push_back({key.at("at").asNumber() * at_unit, bulge.at(0).asNumber(), bulge.at(1).asNumber(), key.at("scale").asNumber()});
+    const double at = at_unit == 1.0 ? key.at("at").asNumberIn(0.0, kMaxRatio) : key.at("at").asNumberIn(-kMaxTwistDeg, kMaxTwistDeg, "degrees");
+    keys.push_back({at * at_unit, bulge.at(0).asNumberIn(-reach, reach, "m"), bulge.at(1).asNumberIn(-reach, reach, "m"),
+                    key.at("scale").asNumberIn(0.0, kMaxScale)});
   }
   return keys;
 }
 
-MuscleResponse readResponse(const JsonReader& in) {
+MuscleResponse readResponse(const JsonReader& in, double body_height) {
   in.allowKeys({"ratio", "twist_deg", "fitted"});
   MuscleResponse response;
-  response.ratio = readCurve(in.at("ratio"), 1.0);
-  response.twist = in.has("twist_deg") ? readCurve(in.at("twist_deg"), kDegree) : std::vector<ResponseKey>{};
+  response.ratio = readCurve(in.at("ratio"), 1.0, body_height);
+  response.twist = in.has("twist_deg") ? readCurve(in.at("twist_deg"), kDegree, body_height) : std::vector<ResponseKey>{};
   response.fitted = in.has("fitted") && in.at("fitted").asBool();
   const std::string problem = muscleResponseProblem(response);
   if (!problem.empty()) in.fail(problem);
@@ -140,8 +167,9 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       if (!(part.stretch >= 1)) item.at("stretch").fail("must be at least 1");
       JsonReader bulge = item.at("bulge");
       if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
-      part.bulge = {bulge.at(0).asNumber(), bulge.at(1).asNumber()};
-      part.weight_radius = item.has("weight_radius") ? item.at("weight_radius").asNumber() : 0.0;
+      const double reach = maxReach(set.body_height);
+      part.bulge = {bulge.at(0).asNumberIn(-reach, reach, "m"), bulge.at(1).asNumberIn(-reach, reach, "m")};
+      part.weight_radius = item.has("weight_radius") ? item.at("weight_radius").asNumberIn(0.0, reach, "m") : 0.0;
       if (item.has("kind") && !parsePartKind(item.at("kind").asString(), &part.kind))
         item.at("kind").fail("must be \"muscle\" or \"corrective\"");
       if (part.kind == PartKind::kCorrective) {
@@ -153,7 +181,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       } else if (item.has("carrier_landmark")) {
         item.at("carrier_landmark").fail("only a corrective has a carrier landmark");
       }
-      part.response = item.has("response") ? readResponse(item.at("response")) : defaultResponse(part);
+      part.response = item.has("response") ? readResponse(item.at("response"), set.body_height) : defaultResponse(part);
       for (auto [key, locator] : {std::pair<const char*, MuscleLocator*>{"origin", &part.origin},
                                   {"insertion", &part.insertion},
                                   {"driver", &part.driver}}) {
@@ -168,6 +196,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
         read.joint = joint;
         read.local = readVector(loc.at("local"));
         read.world = skeleton.bind_world[joint] * read.local;
+        requireWithinReach(loc.at("local"), read.world, set.body_height);
         // Keep the talk-shaped world position when it agrees with the local one, so that a file read
         // and written again is byte-identical; an edit of `local` moves it.
         std::string talk_key = full + (key == std::string("origin") ? "_muscleOrigin"
@@ -222,10 +251,14 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
                         "no attach landmark of " + full + " is resolved on " + set.character);
         };
         int origin_joint = attach(spec.origin_attach);
-        Eigen::Vector3d origin = readVector(group.at(full + "_muscleOrigin"));
-        Eigen::Vector3d insertion = readVector(group.at(full + "_muscleInsertion"));
-        Eigen::Vector3d driver =
-            group.has(full + "_muscleDriver") ? readVector(group.at(full + "_muscleDriver")) : (origin + insertion) / 2.0;
+        auto position = [&](const std::string& key) {
+          const Eigen::Vector3d world = readVector(group.at(key));
+          requireWithinReach(group.at(key), world, set.body_height);
+          return world;
+        };
+        Eigen::Vector3d origin = position(full + "_muscleOrigin");
+        Eigen::Vector3d insertion = position(full + "_muscleInsertion");
+        Eigen::Vector3d driver = group.has(full + "_muscleDriver") ? position(full + "_muscleDriver") : (origin + insertion) / 2.0;
         MusclePart part = partFromPreset(skeleton, spec, side_name, origin_joint, attach(spec.insertion_attach), origin,
                                          insertion, driver, scale);
         part.name = part_name;

@@ -21,7 +21,12 @@ void requireLandmark(const JsonReader& where, const std::string& name) {
   }
 }
 
-PointFormula readFormula(const JsonReader& in) {
+// Lengths in a preset are reference metres, scaled to the body: none is negative (a direction gives the
+// sign) or more than kMaxReferenceHeights reference heights, and a lerp's t stays within kMaxLerp of its
+// segment, so that a placed point lies within about a hundred body heights (docs/presets.md).
+constexpr double kMaxReferenceHeights = 100.0, kMaxLerp = 100.0, kMaxReferenceHeight = 1000.0;
+
+PointFormula readFormula(const JsonReader& in, double max_length) {
   in.requireObject();
   PointFormula formula;
   formula.pointer = in.pointer();
@@ -35,20 +40,20 @@ PointFormula readFormula(const JsonReader& in) {
     formula.kind = PointFormula::Kind::kMean;
     JsonReader items = in.at("mean");
     if (items.arraySize() < 1) items.fail("needs at least one point");
-    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i)));
+    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i), max_length));
   } else if (in.has("lerp")) {
     in.allowKeys({"lerp", "t"});
     formula.kind = PointFormula::Kind::kLerp;
     JsonReader items = in.at("lerp");
     if (items.arraySize() != 2) items.fail("needs exactly two points [A, B]");
-    formula.args = {readFormula(items.at(0)), readFormula(items.at(1))};
-    formula.t = in.at("t").asNumber();
+    formula.args = {readFormula(items.at(0), max_length), readFormula(items.at(1), max_length)};
+    formula.t = in.at("t").asNumberIn(-kMaxLerp, kMaxLerp);
   } else if (in.has("sum")) {
     in.allowKeys({"sum"});
     formula.kind = PointFormula::Kind::kSum;
     JsonReader items = in.at("sum");
     if (items.arraySize() < 1) items.fail("needs at least one term");
-    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i)));
+    for (size_t i = 0; i < items.arraySize(); ++i) formula.args.push_back(readFormula(items.at(i), max_length));
   } else if (in.has("dir")) {
     in.allowKeys({"dir", "ref_m"});
     formula.kind = PointFormula::Kind::kDir;
@@ -56,7 +61,7 @@ PointFormula readFormula(const JsonReader& in) {
     static const std::vector<std::string> kDirections = {"up", "down", "forward", "back", "lateral", "medial"};
     if (std::find(kDirections.begin(), kDirections.end(), formula.name) == kDirections.end())
       in.at("dir").fail("unknown direction '" + formula.name + "' (up, down, forward, back, lateral, medial)");
-    formula.ref_m = in.at("ref_m").asNumber();
+    formula.ref_m = in.at("ref_m").asNumberIn(0.0, max_length, "reference metres");
   } else if (in.has("joint_axis")) {
     in.allowKeys({"joint_axis", "axis", "ref_m"});
     formula.kind = PointFormula::Kind::kJointAxis;
@@ -64,13 +69,14 @@ PointFormula readFormula(const JsonReader& in) {
     requireLandmark(in.at("joint_axis"), formula.name);
     formula.axis = in.at("axis").asString();
     if (formula.axis != "x" && formula.axis != "y" && formula.axis != "z") in.at("axis").fail("must be x, y or z");
-    formula.ref_m = in.at("ref_m").asNumber();
+    formula.ref_m = in.at("ref_m").asNumberIn(0.0, max_length, "reference metres");
   } else if (in.has("mix")) {
     in.allowKeys({"mix"});
     formula.kind = PointFormula::Kind::kMix;
     JsonReader mix = in.at("mix");
     mix.allowKeys({"lateral", "up", "forward"});
-    formula.args = {readFormula(mix.at("lateral")), readFormula(mix.at("up")), readFormula(mix.at("forward"))};
+    formula.args = {readFormula(mix.at("lateral"), max_length), readFormula(mix.at("up"), max_length),
+                    readFormula(mix.at("forward"), max_length)};
   } else if (in.has("locator")) {
     in.allowKeys({"locator"});
     formula.kind = PointFormula::Kind::kLocator;
@@ -136,7 +142,7 @@ LandmarkRules readLandmarkRules(const std::string& path) {
   in.allowKeys({"$schema", "description", "reference_height", "derivations"});
   LandmarkRules rules;
   rules.file = path;
-  if (in.has("reference_height")) rules.reference_height = in.at("reference_height").asNumber();
+  if (in.has("reference_height")) rules.reference_height = in.at("reference_height").asNumberIn(1e-3, kMaxReferenceHeight, "m");
   JsonReader derivations = in.at("derivations");
   for (size_t i = 0; i < derivations.arraySize(); ++i) {
     JsonReader item = derivations.at(i);
@@ -145,7 +151,7 @@ LandmarkRules readLandmarkRules(const std::string& path) {
     derivation.pointer = item.pointer();
     derivation.landmark = item.at("landmark").asString();
     requireLandmark(item.at("landmark"), derivation.landmark);
-    derivation.formula = readFormula(item.at("formula"));
+    derivation.formula = readFormula(item.at("formula"), kMaxReferenceHeights * rules.reference_height);
     derivation.rides_on = item.at("rides_on").asString();
     requireLandmark(item.at("rides_on"), derivation.rides_on);
     rules.derivations.push_back(std::move(derivation));
@@ -172,6 +178,7 @@ MusclePreset readMusclePreset(const std::string& path) {
   if (in.has("reference_height")) {
     preset.reference_height = in.at("reference_height").asNumber();
     if (preset.reference_height <= 0) in.at("reference_height").fail("must be positive");
+    preset.reference_height = in.at("reference_height").asNumberIn(1e-3, kMaxReferenceHeight, "m");
   }
   JsonReader muscles = in.at("muscles");
   if (muscles.arraySize() == 0) muscles.fail("must list at least one muscle part");
@@ -190,11 +197,12 @@ MusclePreset readMusclePreset(const std::string& path) {
     for (const std::string& name : part.insertion_attach) requireLandmark(item.at("insertion_attach"), name);
     if (part.origin_attach.empty()) item.at("origin_attach").fail("must name at least one landmark");
     if (part.insertion_attach.empty()) item.at("insertion_attach").fail("must name at least one landmark");
-    part.origin = readFormula(item.at("origin"));
-    part.insertion = readFormula(item.at("insertion"));
+    const double max_length = kMaxReferenceHeights * preset.reference_height;
+    part.origin = readFormula(item.at("origin"), max_length);
+    part.insertion = readFormula(item.at("insertion"), max_length);
     if (item.has("driver")) {
       part.has_driver = true;
-      part.driver = readFormula(item.at("driver"));
+      part.driver = readFormula(item.at("driver"), max_length);
     }
     if (item.has("compression")) part.compression = item.at("compression").asNumber();
     if (item.has("stretch")) part.stretch = item.at("stretch").asNumber();
@@ -203,8 +211,8 @@ MusclePreset readMusclePreset(const std::string& path) {
     if (item.has("bulge")) {
       JsonReader bulge = item.at("bulge");
       if (bulge.arraySize() != 2) bulge.fail("must be [across_up, across_side]");
-      part.bulge[0] = bulge.at(0).asNumber();
-      part.bulge[1] = bulge.at(1).asNumber();
+      part.bulge[0] = bulge.at(0).asNumberIn(-max_length, max_length, "reference metres");
+      part.bulge[1] = bulge.at(1).asNumberIn(-max_length, max_length, "reference metres");
     }
     part.optional = item.has("optional") && item.at("optional").asBool();
     if (item.has("kind") && !parsePartKind(item.at("kind").asString(), &part.kind))
@@ -227,6 +235,7 @@ MusclePreset readMusclePreset(const std::string& path) {
     if (item.has("weight_radius_ref_m")) {
       part.weight_radius_ref_m = item.at("weight_radius_ref_m").asNumber();
       if (part.weight_radius_ref_m < 0) item.at("weight_radius_ref_m").fail("must not be negative");
+      part.weight_radius_ref_m = item.at("weight_radius_ref_m").asNumberIn(0.0, max_length, "reference metres");
     }
     preset.parts.push_back(std::move(part));
   }

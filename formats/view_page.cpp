@@ -121,7 +121,17 @@ void writeViewDirectory(const std::string& dir, const std::map<std::string, std:
   try {
     fs::permissions(temp, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
                               fs::perms::others_exec);
-    for (const auto& [name, bytes] : files) writeFileAtomically(temp + "/" + name, bytes);
+    for (const auto& [name, bytes] : files) {
+      try {
+        writeFileAtomically(temp + "/" + name, bytes);
+      } catch (const Error& error) {
+        // The page is put together in a hidden folder beside `dir`; the user named `dir`, so the line
+        // names the page's file there (a full disk named the temporary folder, gone by then).
+        const std::string prefix = error.code() + " " + error.where() + ": ";
+        const std::string what = error.what();
+        fail(error.code(), dir + "/" + name, what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+      }
+    }
     if (exists) {
       // rename() cannot replace a non-empty directory: move the old one aside, put the new one in
       // place, then delete the old. Between the two renames `dir` is absent for an instant, never partial.

@@ -243,3 +243,69 @@ TEST_CASE("cli bake: bad input gives one line, a stable code, and no output file
   }
   expectNoOutputs(dir);
 }
+
+TEST_CASE("cli bake: an output that cannot be written leaves none of the others, -o included") {
+  TempDir dir;
+  std::ofstream(dir / "block") << "a regular file, so block/x cannot be created";
+  std::string stats = dir / "stats.json", packed = dir / "p.rbpk", muscles = dir / "m.json";
+  std::string failing;
+  SECTION("--stats") { failing = stats = dir / "block/stats.json"; }
+  SECTION("--packed-out") { failing = packed = dir / "block/p.rbpk"; }
+  SECTION("--muscles-out") { failing = muscles = dir / "block/m.json"; }
+  const CliResult run = runCli("bake " + sampleGlbPathForCli() + " -o " + (dir / "a.glb") + " --stats " +
+                                     stats + " --packed-out " + packed + " --muscles-out " + muscles);
+  INFO(run.err);
+  CHECK(run.exit_code == 2);
+  CHECK(lineCount(run.err) == 1);
+  CHECK(run.err.rfind("IO_WRITE_FAILED " + failing + ":", 0) == 0);
+  // Before issue 34, a.glb (and the outputs before the failing one) stayed.
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path)) CHECK(entry.path().filename() == "block");
+}
+
+TEST_CASE("cli bake: an absurd number in a muscle file or a preset is refused with its JSON pointer, and nothing is written") {
+  // Before issue 34, a locator 1e300 m away (or such a bulge or preset offset) baked exit 0 with NaN
+  // inverse bind matrices and "restLength": null in the file.
+  TempDir dir;
+  REQUIRE(runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "placed.json")).exit_code == 0);
+  const nlohmann::json placed = nlohmann::json::parse(slurp(dir / "placed.json"));
+  const std::string part = placed["rigbake"]["muscles"].begin().key();
+  std::string preset = slurp(sourceDir() + "/presets/muscles/gow_biped.json");
+  std::string args, code, pointer;
+  auto writeMuscles = [&](const nlohmann::json::json_pointer& at, const nlohmann::json& value) {
+    nlohmann::json edited = placed;
+    edited[at] = value;
+    std::ofstream(dir / "muscles.json") << edited.dump();
+    args = " --muscles " + (dir / "muscles.json");
+    code = "MUSCLES_INVALID";
+    pointer = (dir / "muscles.json") + "#" + at.to_string();
+  };
+  auto writePreset = [&](const std::string& from, const std::string& to, const std::string& expected_key) {
+    std::string edited = preset;
+    const size_t at = edited.find(from);
+    REQUIRE(at != std::string::npos);
+    edited.replace(at, from.size(), to);
+    std::ofstream(dir / "preset.json") << edited;
+    args = " --preset " + (dir / "preset.json");
+    code = "PRESET_INVALID";
+    pointer = expected_key;
+  };
+  SECTION("a locator at 1e300") {
+    writeMuscles(nlohmann::json::json_pointer("/rigbake/muscles/" + part + "/origin/local"), {1e300, 0.0, 0.0});
+  }
+  SECTION("a bulge of -1e308") {
+    writeMuscles(nlohmann::json::json_pointer("/rigbake/muscles/" + part + "/bulge/0"), -1e308);
+  }
+  SECTION("a response key's bulge of 1e300") {
+    writeMuscles(nlohmann::json::json_pointer("/rigbake/muscles/" + part + "/response/ratio/0/bulge/1"), 1e300);
+  }
+  SECTION("a preset ref_m of -1e300") { writePreset("\"ref_m\": 0.02", "\"ref_m\": -1e300", "/ref_m:"); }
+  SECTION("a preset bulge of -1e308") { writePreset("\"bulge\": [0.015, 0.0]", "\"bulge\": [-1e308, 0.0]", "/bulge/0:"); }
+  const CliResult r = runCli("bake " + sampleGlbPathForCli() + args + " -o " + (dir / "baked.glb") + " --stats " + (dir / "stats.json"));
+  INFO(r.err);
+  CHECK(r.exit_code == 3);
+  CHECK(lineCount(r.err) == 1);
+  CHECK(r.err.rfind(code + " ", 0) == 0);
+  CHECK(r.err.find(pointer) != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "baked.glb"));
+  CHECK(!std::filesystem::exists(dir / "stats.json"));
+}

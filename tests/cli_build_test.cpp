@@ -1,6 +1,9 @@
 // `rigbake build` as a studio's CI runs it: a manifest of characters, some placed from the preset, one
 // retargeted from another, one broken; in parallel and in order, incrementally, through Ninja and in
 // shards.
+#include <fcntl.h>
+#include <sys/file.h>
+
 #include <algorithm>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -300,4 +303,166 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
     CHECK(test::lineCount(run.err) == 1);
     CHECK_FALSE(fs::exists(dir / "out"));
   }
+}
+
+namespace {
+
+// A project folder `sub` holding sample.glb and manifest.json: one character, `sample`, at `influences`,
+// into sub/out (or `out`). The response is kept, which halves the bake; these tests are about the build.
+std::string writeBuildProject(const test::TempDir& dir, const std::string& sub, int influences,
+                              const nlohmann::json& extra_characters = nlohmann::json::array(),
+                              const std::string& out = "out") {
+  fs::create_directories(dir / sub);
+  fs::copy_file(test::sampleGlbPathForCli(), dir / (sub + "/sample.glb"), fs::copy_options::overwrite_existing);
+  nlohmann::json characters = {{{"name", "sample"}, {"input", "sample.glb"}}};
+  for (const auto& c : extra_characters) characters.push_back(c);
+  const nlohmann::json manifest = {
+      {"influences", influences}, {"response", "keep"}, {"out", out}, {"characters", characters}};
+  const std::string path = dir / (sub + "/manifest.json");
+  std::ofstream(path) << manifest.dump(2);
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("cli build: outputs replaced after their stamp was written are rebuilt, never up-to-date") {
+  // The state a build killed right after renaming a new sample.glb into place left (issue 34): the old
+  // stamp, for influences 10, beside the 4-influence model and muscles of the interrupted run.
+  test::TempDir dir;
+  const std::string manifest10 = writeBuildProject(dir, "p", 10);
+  const std::string manifest4 = writeBuildProject(dir, "q", 4);
+  REQUIRE(runCli("build " + ext::shellQuote(manifest10) + " -j 1").exit_code == 0);
+  REQUIRE(runCli("build " + ext::shellQuote(manifest4) + " -j 1").exit_code == 0);
+  const std::string built10 = slurp(dir / "p/out/sample/sample.glb");
+  REQUIRE(built10 != slurp(dir / "q/out/sample/sample.glb"));
+  for (const char* file : {"sample.glb", "muscles.json"})
+    fs::copy_file(dir / ("q/out/sample/" + std::string(file)), dir / ("p/out/sample/" + std::string(file)),
+                  fs::copy_options::overwrite_existing);
+  const test::CliResult rerun = runCli("build " + ext::shellQuote(manifest10) + " -j 1");
+  INFO(rerun.err);
+  CHECK(rerun.exit_code == 0);
+  CHECK(rerun.err.find("sample: built") != std::string::npos);
+  CHECK(statusOf(summaryOf(dir / "p/out"), "sample") == "built");
+  CHECK(slurp(dir / "p/out/sample/sample.glb") == built10);
+  // And unchanged outputs are still skipped.
+  const test::CliResult again = runCli("build " + ext::shellQuote(manifest10) + " -j 1");
+  CHECK(again.err.find("sample: up-to-date") != std::string::npos);
+}
+
+TEST_CASE("cli build: a second build into a folder another build holds stops at once with one line") {
+  test::TempDir dir;
+  const std::string manifest = writeBuildProject(dir, "p", 4);
+  fs::create_directories(dir / "p/out");
+  // This test process plays the first build: it holds the lock a build takes.
+  const int fd = ::open((dir / "p/out/.rigbake-lock").c_str(), O_RDWR | O_CREAT, 0644);
+  REQUIRE(fd >= 0);
+  REQUIRE(::flock(fd, LOCK_EX) == 0);
+  const test::CliResult refused = runCli("build " + ext::shellQuote(manifest));
+  ::close(fd);
+  INFO(refused.err);
+  CHECK(refused.exit_code == 2);
+  CHECK(test::lineCount(refused.err) == 1);
+  CHECK(refused.err.rfind("BUILD_OUTPUT_LOCKED " + (dir / "p/out") + ":", 0) == 0);
+  CHECK(!fs::exists(dir / "p/out/sample"));
+  CHECK(!fs::exists(dir / "p/out/summary.json"));
+  // Released, the same build runs.
+  CHECK(runCli("build " + ext::shellQuote(manifest)).exit_code == 0);
+}
+
+TEST_CASE("cli build: temporary files a killed run left in the output folder are removed by the next build") {
+  test::TempDir dir;
+  const std::string manifest = writeBuildProject(dir, "p", 4);
+  REQUIRE(runCli("build " + ext::shellQuote(manifest)).exit_code == 0);
+  const std::vector<std::string> leftovers = {"p/out/summary.json.rigbake-tmp-Ab12Cd", "p/out/sample/sample.glb.rigbake-tmp-x9Y8z7"};
+  for (const std::string& leftover : leftovers) std::ofstream(dir / leftover) << "half a file";
+  std::ofstream(dir / "p/out/sample/notes.txt") << "mine";
+  // Another program's temporary file (a `rigbake bake -o` into the same folder, running now) is not the
+  // build's to remove.
+  std::ofstream(dir / "p/out/sample/other.glb.rigbake-tmp-Qr5St6") << "being written";
+  const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
+  INFO(run.err);
+  CHECK(run.exit_code == 0);
+  for (const std::string& leftover : leftovers) CHECK(!fs::exists(dir / leftover));
+  CHECK(slurp(dir / "p/out/sample/notes.txt") == "mine");
+  CHECK(slurp(dir / "p/out/sample/other.glb.rigbake-tmp-Qr5St6") == "being written");
+}
+
+TEST_CASE("cli build: file-system problems are IO_* lines naming the path, never INTERNAL") {
+  test::TempDir dir;
+  SECTION("out is a regular file") {
+    const std::string manifest = writeBuildProject(dir, "p", 4, nlohmann::json::array(), "taken");
+    std::ofstream(dir / "p/taken") << "a file";
+    const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
+    INFO(run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(test::lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_WRITE_FAILED " + (dir / "p/taken") + ":", 0) == 0);
+    CHECK(slurp(dir / "p/taken") == "a file");
+  }
+  SECTION("out has a component longer than the file system allows") {
+    const std::string manifest = writeBuildProject(dir, "p", 4, nlohmann::json::array(), std::string(300, 'o'));
+    const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
+    INFO(run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(test::lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_WRITE_FAILED " + (dir / ("p/" + std::string(300, 'o'))) + ":", 0) == 0);
+  }
+  SECTION("the manifest read through a pipe: its relative out is under /dev/fd") {
+    const std::string manifest = writeBuildProject(dir, "p", 4);
+    nlohmann::json json = nlohmann::json::parse(slurp(manifest));
+    json["characters"][0]["input"] = dir / "p/sample.glb";
+    const ext::CommandResult run = ext::runCommand("echo " + ext::shellQuote(json.dump()) + " | " + std::string(RIGBAKE_CLI) +
+                                                   " build /dev/fd/3 3<&0 2>&1 </dev/null");
+    INFO(run.output);
+    CHECK(run.exit_code == 2);
+    CHECK(test::lineCount(run.output) == 1);
+    CHECK(run.output.rfind("IO_WRITE_FAILED /dev/fd/out:", 0) == 0);
+  }
+  SECTION("an empty out is a manifest error") {
+    const std::string manifest = writeBuildProject(dir, "p", 4, nlohmann::json::array(), "");
+    const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
+    INFO(run.err);
+    CHECK(run.exit_code == 3);
+    CHECK(run.err.rfind("MANIFEST_INVALID " + manifest + "#/out:", 0) == 0);
+  }
+}
+
+TEST_CASE("cli build: a character whose muscles_from source failed has a coded line too") {
+  test::TempDir dir;
+  fs::create_directories(dir / "p");
+  std::ofstream(dir / "p/broken.glb") << "glTF but not really";
+  const std::string manifest =
+      writeBuildProject(dir, "p", 4, {{{"name", "broken"}, {"input", "broken.glb"}},
+                                      {{"name", "follower"}, {"input", "sample.glb"}, {"muscles_from", "broken"}}});
+  const test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " -j 1");
+  INFO(run.err);
+  CHECK(run.exit_code == 1);
+  CHECK(run.err.find("FAILED follower: BUILD_SOURCE_FAILED " + manifest + "#/characters/2/muscles_from: muscles_from character 'broken' failed") !=
+        std::string::npos);
+  const auto summary = nlohmann::json::parse(slurp(dir / "p/out/summary.json"));
+  CHECK(summary["characters"][2]["error"].get<std::string>().rfind("BUILD_SOURCE_FAILED ", 0) == 0);
+}
+
+TEST_CASE("cli build: a character name that is too long or not one printable line is MANIFEST_INVALID") {
+  test::TempDir dir;
+  for (const std::string& name : {std::string(129, 'n'), std::string("two\nlines"), std::string("bell\x07")}) {
+    const std::string manifest = writeBuildProject(dir, "p", 4, {{{"name", name}, {"input", "sample.glb"}}});
+    const test::CliResult run = runCli("build " + ext::shellQuote(manifest));
+    INFO(run.err);
+    CHECK(run.exit_code == 3);
+    CHECK(test::lineCount(run.err) == 1);
+    CHECK(run.err.rfind("MANIFEST_INVALID " + manifest + "#/characters/1/name:", 0) == 0);
+    CHECK(run.err.size() < 400);
+    CHECK(!fs::exists(dir / "p/out"));
+  }
+}
+
+TEST_CASE("cli build: --emit-ninja '' is USAGE, not a build") {
+  test::TempDir dir;
+  const std::string manifest = writeBuildProject(dir, "p", 4);
+  const test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " --emit-ninja ''");
+  INFO(run.err);
+  CHECK(run.exit_code == 1);
+  CHECK(run.err.rfind("USAGE --emit-ninja:", 0) == 0);
+  CHECK(!fs::exists(dir / "p/out"));
 }

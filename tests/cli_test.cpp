@@ -1,8 +1,13 @@
 // The command line as users meet it: clear one-line errors with stable codes and exit statuses, no
 // output left behind by a failed run, deterministic outputs, and the documented --json contract.
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <set>
 #include <utility>
 #include <vector>
 
@@ -10,8 +15,11 @@
 
 #include "anatomy/error.h"
 #include "cli_support.h"
+#include "glb_support.h"
+#include "external_tools.h"
 
 using namespace rigbake::test;
+namespace ext = rigbake::test::external;
 
 namespace {
 
@@ -320,4 +328,170 @@ TEST_CASE("cli: a preset naming an unknown landmark says which and where") {
   expectFailure(r, "PRESET_LANDMARK_UNKNOWN", 3, dir / "m.json");
   CHECK(r.err.find("unknown.json#/muscles/4/origin_attach") != std::string::npos);
   CHECK(r.err.find("shoulderblade") != std::string::npos);
+}
+
+namespace {
+
+// Names of the entries of `dir`.
+std::set<std::string> namesIn(const std::string& dir) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+bool isCharacterDeviceAt(const std::string& path) {
+  struct stat status {};
+  return ::lstat(path.c_str(), &status) == 0 && S_ISCHR(status.st_mode);
+}
+
+bool isFifoAt(const std::string& path) {
+  struct stat status {};
+  return ::lstat(path.c_str(), &status) == 0 && S_ISFIFO(status.st_mode);
+}
+
+}  // namespace
+
+TEST_CASE("cli: an output that is a device, a FIFO or a directory is refused before any work and stays what it was") {
+  TempDir dir;
+  // A private /dev/null (tests run as root): if rigbake replaced it, no other program would notice.
+  const std::string null = dir / "null", fifo = dir / "fifo", folder = dir / "folder";
+  REQUIRE(::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0);
+  REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
+  std::filesystem::create_directories(folder);
+  const std::string sample = ext::shellQuote(sampleGlbPathForCli());
+  struct Case {
+    std::string args, refused;
+  };
+  const std::vector<Case> cases = {
+      {"sample -o " + ext::shellQuote(null), null},
+      {"sample -o " + ext::shellQuote(fifo), fifo},
+      {"sample -o " + ext::shellQuote(folder), folder},
+      {"place " + sample + " -o " + ext::shellQuote(null), null},
+      {"bake " + sample + " -o " + ext::shellQuote(null) + " --stats " + ext::shellQuote(dir / "stats.json"), null},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --stats " + ext::shellQuote(fifo), fifo},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --packed-out " + ext::shellQuote(null), null},
+      {"bake " + sample + " -o " + ext::shellQuote(dir / "a.glb") + " --muscles-out " + ext::shellQuote(folder), folder},
+      {"rom " + sample + " -o " + ext::shellQuote(null), null},
+  };
+  for (const Case& c : cases) {
+    const CliResult run = runCli(c.args);
+    INFO(c.args << "\n" << run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_OUTPUT_NOT_REGULAR " + c.refused + ":", 0) == 0);
+    CHECK(isCharacterDeviceAt(null));
+    CHECK(isFifoAt(fifo));
+    CHECK(std::filesystem::is_directory(folder));
+    CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
+    CHECK(std::filesystem::is_empty(folder));
+  }
+  // /proc/self/fd/1 when stdout is a pipe: a link whose text names nothing, to something not a file.
+  const ext::CommandResult piped =
+      ext::runCommand("cd " + ext::shellQuote(dir.path.string()) + " && " + std::string(RIGBAKE_CLI) + " sample -o /proc/self/fd/1 2>&1 | cat");
+  INFO(piped.output);
+  CHECK(piped.output.rfind("IO_OUTPUT_NOT_REGULAR /proc/self/fd/1: exists and is a FIFO", 0) == 0);
+  CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
+}
+
+TEST_CASE("cli: an output that is a symbolic link writes the file it names and keeps the link") {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "real");
+  std::ofstream(dir / "real/sample.glb") << "old";
+  std::filesystem::create_symlink("real/sample.glb", dir / "link.glb");
+  const CliResult run = runCli("sample -o " + ext::shellQuote(dir / "link.glb"));
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  CHECK(std::filesystem::is_symlink(dir / "link.glb"));
+  CHECK(slurp(dir / "real/sample.glb") == slurp(sampleGlbPathForCli()));
+  CHECK(namesIn(dir / "real") == std::set<std::string>{"sample.glb"});
+}
+
+TEST_CASE("cli: an empty output path is USAGE, not a file with no name") {
+  for (const std::string& args : {std::string("sample -o ''"), "place " + ext::shellQuote(sampleGlbPathForCli()) + " -o ''",
+                                  "bake " + ext::shellQuote(sampleGlbPathForCli()) + " -o ''"}) {
+    const CliResult run = runCli(args);
+    INFO(args << "\n" << run.err);
+    CHECK(run.exit_code == 1);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("USAGE -o:", 0) == 0);
+  }
+}
+
+TEST_CASE("cli: a device as an input is one line at once, an input past its limit is INPUT_TOO_LARGE, a pipe is read") {
+  // Before issue 34, /dev/zero as any input grew memory until the run was killed or ended INTERNAL.
+  TempDir dir;
+  const std::string sample = ext::shellQuote(sampleGlbPathForCli());
+  const std::vector<std::string> device_inputs = {
+      "bake /dev/zero -o " + (dir / "a.glb"),
+      "place " + sample + " --preset /dev/zero -o " + (dir / "m.json"),
+      "bake " + sample + " --muscles /dev/zero -o " + (dir / "a.glb"),
+      "landmarks " + sample + " --map /dev/zero",
+  };
+  for (const std::string& args : device_inputs) {
+    const auto start = std::chrono::steady_clock::now();
+    const CliResult run = runCli(args);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    INFO(args << "\n" << run.err);
+    CHECK(run.exit_code == 2);
+    CHECK(lineCount(run.err) == 1);
+    CHECK(run.err.rfind("IO_INPUT_NOT_REGULAR /dev/zero: is a character device", 0) == 0);
+    CHECK(seconds < 3.0);
+  }
+  // A 65 MiB muscle file (sparse: no disk is spent) is past the 64 MiB a JSON input may have.
+  { std::ofstream(dir / "huge.json") << "{"; }
+  std::filesystem::resize_file(dir / "huge.json", (std::uintmax_t{65} << 20));
+  const CliResult huge = runCli("bake " + sample + " --muscles " + (dir / "huge.json") + " -o " + (dir / "a.glb"));
+  INFO(huge.err);
+  CHECK(huge.exit_code == 3);
+  CHECK(lineCount(huge.err) == 1);
+  CHECK(huge.err.rfind("INPUT_TOO_LARGE " + (dir / "huge.json") + ": is 68157440 bytes", 0) == 0);
+  CHECK(namesIn(dir.path.string()) == std::set<std::string>{"huge.json"});
+  // A preset through a pipe is still read, up to the same limit.
+  const std::string preset = ext::shellQuote(sourceDir() + "/presets/muscles/gow_biped.json");
+  REQUIRE(runCli("place " + sample + " --preset " + preset + " -o " + (dir / "by_path.json")).exit_code == 0);
+  const ext::CommandResult piped = ext::runCommand("cat " + preset + " | " + std::string(RIGBAKE_CLI) + " place " + sample +
+                                                   " --preset /dev/stdin -o " + (dir / "by_pipe.json") + " 2>&1");
+  INFO(piped.output);
+  CHECK(piped.exit_code == 0);
+  CHECK(slurp(dir / "by_pipe.json") == slurp(dir / "by_path.json"));
+}
+
+namespace {
+
+// `glb` with its JSON chunk replaced by `json` (the binary chunk kept as is).
+std::string glbWithJson(const std::string& glb, const nlohmann::json& json) {
+  std::uint32_t json_length = 0;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  std::string text = json.dump();
+  while (text.size() % 4 != 0) text += ' ';
+  auto word = [](std::uint32_t value) { return std::string(reinterpret_cast<const char*>(&value), 4); };
+  const std::string rest = glb.substr(20 + json_length);
+  const std::string body = word(static_cast<std::uint32_t>(text.size())) + "JSON" + text + rest;
+  return "glTF" + word(2) + word(static_cast<std::uint32_t>(12 + body.size())) + body;
+}
+
+}  // namespace
+
+TEST_CASE("cli: a skeleton whose root joint has a zero scale is GLTF_SKIN_INVALID, not NaN or an assertion") {
+  // The bind transforms then have no axes: the pose code asserted (sanitizer build) or wrote NaN.
+  TempDir dir;
+  const std::string glb = slurp(sampleGlbPathForCli());
+  nlohmann::json json = glbJson(glb);
+  std::set<int> children;
+  for (const auto& node : json["nodes"])
+    if (node.contains("children")) children.insert(node["children"].begin(), node["children"].end());
+  int root = -1;
+  for (const auto& joint : json["skins"][0]["joints"])
+    if (!children.count(joint.get<int>())) root = joint.get<int>();
+  REQUIRE(root >= 0);
+  json["nodes"][root].erase("matrix");
+  json["nodes"][root]["scale"] = {0.0, 0.0, 0.0};
+  std::ofstream(dir / "flat.glb", std::ios::binary) << glbWithJson(glb, json);
+  const CliResult run = runCli("bake " + (dir / "flat.glb") + " -o " + (dir / "baked.glb"));
+  INFO(run.err);
+  CHECK(run.exit_code == 3);
+  CHECK(lineCount(run.err) == 1);
+  CHECK(run.err.rfind("GLTF_SKIN_INVALID " + (dir / "flat.glb") + ":", 0) == 0);
+  CHECK(run.err.find("degenerate") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "baked.glb"));
 }

@@ -2,6 +2,8 @@
 // exits 0; a muscle file with a locator 1 m off makes it exit 1 with LOCATOR_NEAR_SURFACE failed in
 // every report; a bad config is exit 3 and writes nothing; the report is byte-identical across runs,
 // and Chromium renders it.
+#include <sys/stat.h>
+
 #include <map>
 
 #include "validate_fixture.h"
@@ -198,4 +200,62 @@ TEST_CASE("cli validate: Chromium renders the CLI's report.html with its plots a
   CHECK(countOccurrences(run.dom, "<svg class=\"chart deformation\"") == 1);
   CHECK(run.log.find("Uncaught") == std::string::npos);
   CHECK(run.log.find("ERROR:CONSOLE") == std::string::npos);
+}
+
+TEST_CASE("cli validate: a report that cannot be written leaves none of the three") {
+  test::TempDir dir;
+  const std::string reports = dir / "reports";
+  std::filesystem::create_directories(reports);
+  std::ofstream(dir / "block") << "a regular file";
+  std::string code;
+  SECTION("report.html a link into a regular file: its temporary file cannot be created") {
+    std::filesystem::create_symlink("../block/report.html", reports + "/report.html");
+    code = "IO_WRITE_FAILED";
+  }
+  SECTION("report.html a directory") {
+    std::filesystem::create_directories(reports + "/report.html");
+    code = "IO_OUTPUT_NOT_REGULAR";
+  }
+  const test::CliResult run = runCli("validate " + ext::shellQuote(cliBake().glb) + " --no-pictures --report " + ext::shellQuote(reports));
+  INFO(run.err);
+  CHECK(run.exit_code == 2);
+  CHECK(test::lineCount(run.err) == 1);
+  CHECK(run.err.rfind(code + " " + reports + "/report.html:", 0) == 0);
+  std::vector<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(reports)) left.push_back(entry.path().filename().string());
+  CHECK(left == std::vector<std::string>{"report.html"});
+}
+
+TEST_CASE("cli validate: a report path that is a FIFO is refused before any work and stays a FIFO") {
+  test::TempDir dir;
+  const std::string reports = dir / "reports";
+  std::filesystem::create_directories(reports);
+  REQUIRE(::mkfifo((reports + "/report.json").c_str(), 0644) == 0);
+  const test::CliResult run = runCli("validate " + ext::shellQuote(cliBake().glb) + " --report " + ext::shellQuote(reports));
+  INFO(run.err);
+  CHECK(run.exit_code == 2);
+  CHECK(test::lineCount(run.err) == 1);
+  CHECK(run.err.rfind("IO_OUTPUT_NOT_REGULAR " + reports + "/report.json:", 0) == 0);
+  CHECK(std::filesystem::is_fifo(reports + "/report.json"));
+  std::vector<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(reports)) left.push_back(entry.path().filename().string());
+  CHECK(left == std::vector<std::string>{"report.json"});
+  // An empty --report names no folder.
+  const test::CliResult empty = runCli("validate " + ext::shellQuote(cliBake().glb) + " --report ''");
+  CHECK(empty.exit_code == 1);
+  CHECK(empty.err.rfind("USAGE --report:", 0) == 0);
+}
+
+TEST_CASE("cli validate: a report folder the run created is gone again when its reports cannot be written") {
+  // A full disk, played by a file size limit: write() fails with EFBIG (SIGXFSZ ignored, or it kills).
+  test::TempDir dir;
+  const std::string reports = dir / "new/reports";
+  const ext::CommandResult run = ext::runCommand("ulimit -f 8 && trap '' XFSZ && " + std::string(RIGBAKE_CLI) + " validate " +
+                                                 ext::shellQuote(cliBake().glb) + " --no-pictures --report " +
+                                                 ext::shellQuote(reports) + " 2>&1");
+  INFO(run.output);
+  CHECK(run.exit_code == 2);
+  CHECK(run.output.rfind("IO_WRITE_FAILED " + reports + "/report.", 0) == 0);
+  CHECK(run.output.find("File too large") != std::string::npos);
+  CHECK_FALSE(std::filesystem::exists(dir / "new"));
 }

@@ -307,3 +307,22 @@ TEST_CASE("a failed write leaves no file behind and says where") {
     CHECK(error.where() == "/bufferViews/0");
   }
 }
+
+TEST_CASE("atomic files: an OutputBatch whose second file cannot be written leaves neither, and no temporary file") {
+  ext::ScratchDir dir;
+  REQUIRE(!dir.path().empty());
+  std::ofstream(dir.file("block")) << "a regular file, so block/x cannot be created";
+  OutputBatch batch;
+  batch.add(dir.file("first.json"), "{}\n");
+  batch.add(dir.file("block/second.json"), "{}\n");
+  try {
+    batch.commit();
+    FAIL("the batch committed although block/second.json cannot be written");
+  } catch (const Error& error) {
+    CHECK(error.code() == "IO_WRITE_FAILED");
+    CHECK(error.where() == dir.file("block/second.json"));
+  }
+  std::set<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) left.insert(entry.path().filename().string());
+  CHECK(left == std::set<std::string>{"block"});
+}

@@ -345,6 +345,20 @@ TEST_CASE("rigbake view: bad input, help, atomic and deterministic output") {
     CHECK(run.err.find("rigbake bake") != std::string::npos);
     CHECK_FALSE(std::filesystem::exists(dir / "page"));
   }
+  SECTION("a write that fails (a file size limit, as a full disk) names the page's file, not the temporary folder") {
+    const std::string baked = bakeForView(sample, "--influences 4", dir / "baked.glb");
+    // ulimit -f makes write() fail with EFBIG past 64 blocks; SIGXFSZ, ignored, would otherwise kill the run.
+    const ext::CommandResult run = ext::runCommand("ulimit -f 64 && trap '' XFSZ && " + std::string(RIGBAKE_CLI) + " view " +
+                                                   viewArg(baked) + " -o " + viewArg(dir / "page") + " --player " +
+                                                   viewArg(player) + " 2>&1");
+    INFO(run.output);
+    CHECK(run.exit_code == 2);
+    CHECK(run.output.rfind("IO_WRITE_FAILED " + (dir / "page") + "/" + kViewModelFile + ": cannot write: File too large", 0) == 0);
+    CHECK(run.output.find("rigbake-tmp") == std::string::npos);
+    CHECK_FALSE(std::filesystem::exists(dir / "page"));
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path))
+      CHECK(entry.path().filename().string().find("rigbake-tmp") == std::string::npos);
+  }
   SECTION("a missing player bundle is VIEW_PLAYER_MISSING") {
     const test::CliResult run = test::runCli("view " + viewArg(sample) + " -o " + viewArg(dir / "page") + " --player " + viewArg(dir / "none.js"));
     CHECK(run.exit_code == 2);
