@@ -3,7 +3,9 @@
 // volume plain skinning loses; on the mannequin, that bake --stats reports it and the roughness figures.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <nlohmann/json.hpp>
 
 #include "anatomy_fixture.h"
 #include "cli_support.h"

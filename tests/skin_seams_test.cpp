@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <map>
+#include <nlohmann/json.hpp>
 
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "external_tools.h"
 #include "formats/preset_json.h"
+#include "formats/rom_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/rom.h"
 #include "pipeline/seam_opening.h"
