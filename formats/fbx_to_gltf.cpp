@@ -482,17 +482,9 @@ Sampled sampleKeys(const Key* keys, unsigned count, double ticks_per_second, dou
 void addSampler(const Sampled& sampled, int node, const char* path, int type, GltfBufferAppender* buffers,
                 tinygltf::Animation* animation) {
   if (sampled.times.empty()) return;
-  tinygltf::AnimationSampler sampler;
-  sampler.input = buffers->addFloats(sampled.times, TINYGLTF_TYPE_SCALAR, 1, true);
+  const int input = buffers->addFloats(sampled.times, TINYGLTF_TYPE_SCALAR, 1, true);
   const int width = type == TINYGLTF_TYPE_VEC4 ? 4 : 3;
-  sampler.output = buffers->addFloats(sampled.values, type, width);
-  sampler.interpolation = "LINEAR";
-  animation->samplers.push_back(sampler);
-  tinygltf::AnimationChannel channel;
-  channel.sampler = static_cast<int>(animation->samplers.size()) - 1;
-  channel.target_node = node;
-  channel.target_path = path;
-  animation->channels.push_back(channel);
+  addLinearChannel(input, buffers->addFloats(sampled.values, type, width), node, path, animation);
 }
 
 void addAnimations(const aiScene& scene, const SceneIndex& index, tinygltf::Model* model, GltfBufferAppender* buffers,

@@ -84,16 +84,7 @@ void writeJiggles(const BakedClip& clip, const Skeleton& skeleton, int input, Gl
           replaced = true;
         }
         if (replaced) continue;
-        tinygltf::AnimationSampler sampler;
-        sampler.input = input;
-        sampler.output = output;
-        sampler.interpolation = "LINEAR";
-        animation->samplers.push_back(sampler);
-        tinygltf::AnimationChannel channel;
-        channel.sampler = static_cast<int>(animation->samplers.size()) - 1;
-        channel.target_node = node;
-        channel.target_path = path;
-        animation->channels.push_back(channel);
+        addLinearChannel(input, output, node, path, animation);
       }
     }
     tinygltf::Value::Object entry;

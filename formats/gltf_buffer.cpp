@@ -53,4 +53,17 @@ void floatBounds(const std::vector<float>& values, int width, std::vector<double
   }
 }
 
+void addLinearChannel(int input, int output, int node, const char* path, tinygltf::Animation* animation) {
+  tinygltf::AnimationSampler sampler;
+  sampler.input = input;
+  sampler.output = output;
+  sampler.interpolation = "LINEAR";
+  animation->samplers.push_back(sampler);
+  tinygltf::AnimationChannel channel;
+  channel.sampler = static_cast<int>(animation->samplers.size()) - 1;
+  channel.target_node = node;
+  channel.target_path = path;
+  animation->channels.push_back(channel);
+}
+
 }  // namespace rigbake

@@ -8,6 +8,7 @@
 
 namespace tinygltf {
 class Model;
+struct Animation;
 }
 
 namespace rigbake {
@@ -36,6 +37,10 @@ class GltfBufferAppender {
   tinygltf::Model* model_;
   int buffer_ = -1;
 };
+
+// A LINEAR sampler over the accessors `input` (times) and `output` (values), and the channel that
+// drives `path` ("translation", "rotation", "scale") of `node` with it.
+void addLinearChannel(int input, int output, int node, const char* path, tinygltf::Animation* animation);
 
 // Component-wise bounds of float data, as the spec wants them: of the stored floats.
 void floatBounds(const std::vector<float>& values, int width, std::vector<double>* min, std::vector<double>* max);

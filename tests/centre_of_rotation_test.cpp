@@ -45,14 +45,6 @@ MeshPart weightedTube() {
   return tube;
 }
 
-InfluenceSet influencesOf(const MeshPart& mesh) {
-  InfluenceSet set;
-  set.slots_per_vertex = mesh.influences_per_vertex;
-  set.joints = mesh.joints;
-  set.weights = mesh.weights;
-  return set;
-}
-
 double volumeOf(const MeshPart& mesh, const std::vector<Eigen::Vector3d>& posed) {
   const VolumeSurface surface = buildVolumeSurface(mesh, 1e-9);
   return enclosedVolume(surface.whole, weldedPositions(surface, posed));
@@ -61,7 +53,7 @@ double volumeOf(const MeshPart& mesh, const std::vector<Eigen::Vector3d>& posed)
 // Volume change of the tube with joint 1 turned by `turn` about the origin, plain skinning and centres.
 std::pair<double, double> volumeChanges(const Eigen::AngleAxisd& turn) {
   const MeshPart tube = weightedTube();
-  const InfluenceSet weights = influencesOf(tube);
+  const InfluenceSet weights = influencesFromMesh(tube);
   std::vector<Eigen::Affine3d> frame = {Eigen::Affine3d::Identity(), Eigen::Affine3d(turn)};
   const RotationCentres centres = optimizedRotationCentres(tube, weights, 2);
   const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
@@ -97,7 +89,7 @@ TEST_CASE("centres of rotation: a tube bent 90 degrees or twisted 150 keeps the 
 
 TEST_CASE("centres of rotation: a vertex held by one joint moves rigidly with it, and one with no similar skin by linear blending") {
   MeshPart tube = weightedTube();
-  const InfluenceSet weights = influencesOf(tube);
+  const InfluenceSet weights = influencesFromMesh(tube);
   const RotationCentres centres = optimizedRotationCentres(tube, weights, 1);
   CHECK(centres.has_centre[0] == 0);  // x = -1: joint 0 alone
   const int middle = 20 * 24;         // x = 0: half and half
