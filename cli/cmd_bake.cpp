@@ -102,7 +102,8 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
       {"units", "m"},
       {"influences", bake.influences},
       {"muscle_joints", muscles.parts.size()},
-      {"joints_added", bake.joints.size()},
+      // Nodes the file gains: each muscle's skinned joint, and its base, tip and driver with --helper-joints.
+      {"joints_added", bake.helper_joints ? bake.joints.size() : muscles.parts.size()},
       {"vertices", bake.vertex_count},
       {"clips", bake.clips.size()},
       {"deformation_error_mm", deformationJson(character, bake, bake.error)},
@@ -193,11 +194,15 @@ int run(const BakeCommandOptions& options) {
   progress.clear();
   if (options.json) std::cout << jsonText(stats) << "\n";
   std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
-            << bake.joints.size() << " joints) into " << options.output << ": " << bake.influences
-            << " influences/vertex, " << bake.vertex_count << " vertices, " << bake.clips.size()
-            << " clips; deformation error max " << stats["deformation_error_mm"]["max"].get<double>() << " mm, rms "
-            << stats["deformation_error_mm"]["rms"].get<double>() << " mm; skin data "
-            << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
+            << stats["joints_added"].get<int>() << " joints added) into " << options.output << ": " << bake.influences
+            << " influences/vertex, " << bake.vertex_count << " vertices, " << bake.clips.size() << " clips; ";
+  // Without a clip nothing moved, so there is no deformation to state (never "max 0.0000 mm").
+  if (bake.clips.empty())
+    std::cerr << "no clip, so no deformation measured (--rom measures on range-of-motion clips)";
+  else
+    std::cerr << "deformation error max " << stats["deformation_error_mm"]["max"].get<double>() << " mm, rms "
+              << stats["deformation_error_mm"]["rms"].get<double>() << " mm";
+  std::cerr << "; skin data " << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
             << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
   if (bake.gltf_weights == GltfWeights::kUnorm16) {
     std::cerr << "WEIGHTS_n in 1/65535 steps: deformation error max "
@@ -250,8 +255,13 @@ int run(const BakeCommandOptions& options) {
               << legs.largest_turn_deg << " degrees: the legs stay plain skinning (--preset gow_fullbody covers them)\n";
   }
   if (!bake_options.jiggles.empty()) {
-    std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size()
-              << " hits, " << (options.springs_only ? "not baked" : "baked into every clip")
+    // Where the jiggle lives in the file: a runtime bake writes no channels, so its jiggles are the
+    // extension's, simulated by the engine (docs/jiggle.md).
+    const char* where = options.springs_only                   ? "not baked"
+                        : bake.motion == MuscleMotion::kRuntime ? "in the RIGBAKE_muscle_rig extension, simulated at run time (no channels)"
+                        : bake.motion == MuscleMotion::kBoth    ? "baked into every clip, and in the RIGBAKE_muscle_rig extension"
+                                                                : "baked into every clip";
+    std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size() << " hits, " << where
               << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
   }
   if (file.vrm_constrained_muscles > 0) {

@@ -204,16 +204,7 @@ tinygltf::Model bakedModelAndNodes(const GltfDocument& document, const Character
       const std::vector<float>& rotations = trs_keys.rotations;
       const std::vector<float>& scales = trs_keys.scales;
       auto addChannel = [&](const std::vector<float>& values, int type, int components, const char* path) {
-        tinygltf::AnimationSampler sampler;
-        sampler.input = input;
-        sampler.output = data.addFloats(values, type, components);
-        sampler.interpolation = "LINEAR";
-        animation.samplers.push_back(sampler);
-        tinygltf::AnimationChannel channel;
-        channel.sampler = static_cast<int>(animation.samplers.size()) - 1;
-        channel.target_node = node_of_joint[k];
-        channel.target_path = path;
-        animation.channels.push_back(channel);
+        addLinearChannel(input, data.addFloats(values, type, components), node_of_joint[k], path, &animation);
       };
       addChannel(translations, TINYGLTF_TYPE_VEC3, 3, "translation");
       addChannel(rotations, TINYGLTF_TYPE_VEC4, 4, "rotation");

@@ -309,3 +309,27 @@ TEST_CASE("cli bake: an absurd number in a muscle file or a preset is refused wi
   CHECK(!std::filesystem::exists(dir / "baked.glb"));
   CHECK(!std::filesystem::exists(dir / "stats.json"));
 }
+
+TEST_CASE("cli bake: a character without clips says it measured nothing, and the summary counts the joints the file gains") {
+  const std::string kaykit = requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
+  if (kaykit.empty()) return;
+  TempDir dir;
+  CliResult r = runCli("bake " + kaykit + " -o " + (dir / "k.glb") + " --stats " + (dir / "stats.json"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  CHECK(r.err.find("0 clips; no clip, so no deformation measured (--rom measures on range-of-motion clips)") != std::string::npos);
+  CHECK(r.err.find("deformation error max 0.0000") == std::string::npos);
+  const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "stats.json"));
+  // A default bake writes one skinned joint per muscle part; --helper-joints adds base, tip and driver.
+  CHECK(stats["joints_added"] == stats["muscle_joints"]);
+  CHECK(r.err.find("(" + std::to_string(stats["joints_added"].get<int>()) + " joints added)") != std::string::npos);
+  int skinned = 0, helpers = 0;
+  const nlohmann::json baked = glbJson(slurp(dir / "k.glb"));
+  for (const nlohmann::json& node : baked["nodes"]) {
+    const std::string name = node.value("name", "");
+    skinned += name.size() > 14 && name.compare(name.size() - 14, 14, "_muscleSkinned") == 0;
+    helpers += name.find("_muscleBase") != std::string::npos || name.find("_muscleTip") != std::string::npos;
+  }
+  CHECK(skinned == stats["joints_added"].get<int>());
+  CHECK(helpers == 0);
+}

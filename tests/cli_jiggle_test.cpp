@@ -251,3 +251,20 @@ TEST_CASE("Khronos validator: jiggle bakes of the sample, its VRM variants and r
     CHECK(summary.errors == 0);
   }
 }
+
+TEST_CASE("cli bake --jiggle: the summary says where the jiggle lives, extension or channels") {
+  test::TempDir dir;
+  const std::string sample = test::sampleGlbPathForCli();
+  // The default (runtime) bake writes no channels: its jiggles are the extension's.
+  test::CliResult runtime = runCli("bake " + ext::shellQuote(sample) + " --response keep --jiggle biceps -o " + ext::shellQuote(dir / "r.glb"));
+  INFO(runtime.err);
+  REQUIRE(runtime.exit_code == 0);
+  CHECK(runtime.err.find("in the RIGBAKE_muscle_rig extension, simulated at run time (no channels)") != std::string::npos);
+  CHECK(runtime.err.find("baked into every clip") == std::string::npos);
+  const nlohmann::json json = test::glbJson(slurp(dir / "r.glb"));
+  CHECK(json["extensions"]["RIGBAKE_muscle_rig"].contains("jiggles"));
+  test::CliResult sampled =
+      runCli("bake " + ext::shellQuote(sample) + " --response keep --muscle-motion sampled --jiggle biceps -o " + ext::shellQuote(dir / "s.glb"));
+  REQUIRE(sampled.exit_code == 0);
+  CHECK(sampled.err.find("jiggle: 2 joints, 0 hits, baked into every clip\n") != std::string::npos);
+}
