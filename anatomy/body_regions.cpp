@@ -15,19 +15,6 @@ int BodyRegion::triangleCount() const {
 
 namespace {
 
-// joint -> the landmarks that own it: those resolved to the joint itself, else its nearest ancestor's.
-std::vector<std::set<std::string>> landmarkOwners(const Skeleton& skeleton, const LandmarkSet& landmarks) {
-  std::vector<std::set<std::string>> on_joint(skeleton.size());
-  for (const auto& [name, landmark] : landmarks.landmarks) {
-    if (landmark.resolved && !landmark.from_joint.empty() && landmark.joint >= 0) on_joint[landmark.joint].insert(name);
-  }
-  std::vector<std::set<std::string>> owners(skeleton.size());
-  for (int j = 0; j < skeleton.size(); ++j) {  // parents come first
-    owners[j] = !on_joint[j].empty() || skeleton.parents[j] < 0 ? on_joint[j] : owners[skeleton.parents[j]];
-  }
-  return owners;
-}
-
 struct SidedRule {
   const RegionRule* rule = nullptr;
   std::string region;  // final name
@@ -40,6 +27,18 @@ struct SidedRule {
 };
 
 }  // namespace
+
+std::vector<std::set<std::string>> landmarkOwners(const Skeleton& skeleton, const LandmarkSet& landmarks) {
+  std::vector<std::set<std::string>> on_joint(skeleton.size());
+  for (const auto& [name, landmark] : landmarks.landmarks) {
+    if (landmark.resolved && !landmark.from_joint.empty() && landmark.joint >= 0) on_joint[landmark.joint].insert(name);
+  }
+  std::vector<std::set<std::string>> owners(skeleton.size());
+  for (int j = 0; j < skeleton.size(); ++j) {  // parents come first
+    owners[j] = !on_joint[j].empty() || skeleton.parents[j] < 0 ? on_joint[j] : owners[skeleton.parents[j]];
+  }
+  return owners;
+}
 
 std::vector<BodyRegion> resolveBodyRegions(const Character& character, const LandmarkSet& landmarks,
                                            const RegionPreset& preset) {

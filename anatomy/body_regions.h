@@ -5,10 +5,12 @@
 // order and the first that takes a triangle keeps it; rules with the same name form one region.
 #pragma once
 
+#include <set>
 #include <string>
 #include <vector>
 
 #include "anatomy/character.h"
+#include "anatomy/creases.h"
 #include "anatomy/landmarks.h"
 
 namespace rigbake {
@@ -35,6 +37,7 @@ struct RegionPreset {
   std::string name;
   std::string file;
   std::vector<RegionRule> rules;
+  std::vector<CreaseRule> creases;  // for the crease contact figures (anatomy/creases.h)
 };
 
 struct BodyRegion {
@@ -46,6 +49,9 @@ struct BodyRegion {
 
 // Every region that has at least one triangle, in the order the preset first names them (left before
 // right). Rules whose landmarks the character does not resolve take nothing.
+// Per joint, the landmarks that own it: those resolved to the joint itself, else its nearest ancestor's.
+std::vector<std::set<std::string>> landmarkOwners(const Skeleton& skeleton, const LandmarkSet& landmarks);
+
 std::vector<BodyRegion> resolveBodyRegions(const Character& character, const LandmarkSet& landmarks,
                                            const RegionPreset& preset);
 

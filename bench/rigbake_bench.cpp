@@ -69,7 +69,9 @@ int main(int argc, char** argv) {
     options.measure_quality = !error_only;
     // The body regions `bake` measures and fits by default (--regions body): without them the bench
     // timed a lighter fit and lighter figures than the CLI runs.
-    options.regions = resolveBodyRegions(loaded.character, landmarks, readRegionPreset(presets + "/regions/body.json"));
+    const RegionPreset region_preset = readRegionPreset(presets + "/regions/body.json");
+    options.regions = resolveBodyRegions(loaded.character, landmarks, region_preset);
+    options.creases = resolveCreases(loaded.character, landmarks, region_preset.creases);
     const double place = lap();
     if (mode == "fit") {
       const MuscleSet fitted_muscles = bakeCharacter(loaded.character, muscles, options).muscles;

@@ -207,7 +207,9 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     options.motion = character.muscle_motion;
     options.helper_joints = character.helper_joints;
     options.response = character.response;
-    options.regions = resolveBodyRegions(body, loaded.landmarks, readRegionPreset(presets.regions));
+    const RegionPreset region_preset = readRegionPreset(presets.regions);
+    options.regions = resolveBodyRegions(body, loaded.landmarks, region_preset);
+    options.creases = resolveCreases(body, loaded.landmarks, region_preset.creases);
     BakeResult bake = bakeCharacter(body, muscles, options);
     const BakedFile file = writeBakedFile(*loaded.character.document, body, bake, true, {});
     // The muscles as baked (carriers chosen, response fitted): what a retarget of this cast carries on.

@@ -1,6 +1,7 @@
 // `rigbake bake CHAR --muscles muscles.json -o baked.glb`: muscle joints, their animation and skin
 // weights into a new glTF, with the deformation error and memory figures of the chosen influence count.
 #include <iomanip>
+#include <sstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 
@@ -150,8 +151,9 @@ int run(const BakeCommandOptions& options) {
   bake_options.fit.max_poses = options.fit_poses;
   parseMuscleMotion(options.muscle_motion, &bake_options.motion);
   bake_options.helper_joints = options.helper_joints;
-  bake_options.regions =
-      resolveBodyRegions(character, resolved.landmarks, readRegionPreset(presetFile(options.presets, "regions", options.regions)));
+  const RegionPreset region_preset = readRegionPreset(presetFile(options.presets, "regions", options.regions));
+  bake_options.regions = resolveBodyRegions(character, resolved.landmarks, region_preset);
+  bake_options.creases = resolveCreases(character, resolved.landmarks, region_preset.creases);
   if (!options.jiggle.empty()) {
     bake_options.jiggles =
         resolveJiggles(readJigglePreset(presetFile(options.presets, "jiggle", options.jiggle)), character.skeleton, &resolved.landmarks, &muscles);
@@ -239,6 +241,29 @@ int run(const BakeCommandOptions& options) {
     std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
               << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
               << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm\n";
+  }
+  // The crease whose rig passes more skin through the opposing skin than plain skinning does, most of all.
+  const ClipQuality* crease_clip = nullptr;
+  const CreaseContact* crease = nullptr;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    for (const CreaseContact& contact : clip.creases) {
+      auto excess = [](const CreaseContact& c) { return c.skinning[3].through - c.skinning[0].through; };
+      if (!crease || excess(contact) > excess(*crease)) {
+        crease = &contact;
+        crease_clip = &clip;
+      }
+    }
+  }
+  if (crease) {
+    auto through = [](const CreaseMethodContact& c) {
+      std::ostringstream text;
+      text << c.through << " (" << std::setprecision(3) << 1000.0 * c.deepest << " mm deep)";
+      return text.str();
+    };
+    std::cerr << std::setprecision(3) << "crease '" << crease->crease << "' in '" << crease_clip->clip << "' bent "
+              << crease->bend * 180.0 / 3.14159265358979323846 << " deg: skin vertices through the opposing skin, input skinning "
+              << through(crease->skinning[0]) << ", dual quaternions " << through(crease->skinning[1]) << ", centres of rotation "
+              << through(crease->skinning[2]) << ", rig " << through(crease->skinning[3]) << "\n";
   }
   if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
     const ClipQuality* worst = nullptr;

@@ -243,10 +243,49 @@ MusclePreset readMusclePreset(const std::string& path) {
   return preset;
 }
 
+namespace {
+
+// A crease (anatomy/creases.h): {"name", "sided", "proximal": [landmarks], "distal": [landmarks],
+// "bend": [proximal landmark, distal landmark], "near": {"landmark", "radius": {"from", "to", "fraction"}}}.
+CreaseRule readCreaseRule(const JsonReader& item) {
+  item.allowKeys({"name", "sided", "proximal", "distal", "bend", "near", "why"});
+  CreaseRule rule;
+  rule.pointer = item.pointer();
+  rule.name = item.at("name").asString();
+  if (rule.name.empty()) item.at("name").fail("must not be empty");
+  rule.sided = item.has("sided") && item.at("sided").asBool();
+  for (const char* key : {"proximal", "distal"}) {
+    std::vector<std::string>& side = std::string(key) == "proximal" ? rule.proximal : rule.distal;
+    side = item.at(key).asStringList();
+    if (side.empty()) item.at(key).fail("must name at least one landmark");
+    for (const std::string& landmark : side) requireLandmark(item.at(key), landmark);
+  }
+  JsonReader bend = item.at("bend");
+  if (bend.arraySize() != 2) bend.fail("must be [proximal landmark, distal landmark]");
+  rule.bend_proximal = bend.at(0).asString();
+  rule.bend_distal = bend.at(1).asString();
+  requireLandmark(bend.at(0), rule.bend_proximal);
+  requireLandmark(bend.at(1), rule.bend_distal);
+  JsonReader near = item.at("near");
+  near.allowKeys({"landmark", "radius"});
+  rule.near = near.at("landmark").asString();
+  requireLandmark(near.at("landmark"), rule.near);
+  JsonReader radius = near.at("radius");
+  radius.allowKeys({"from", "to", "fraction"});
+  rule.radius_from = radius.at("from").asString();
+  rule.radius_to = radius.at("to").asString();
+  requireLandmark(radius.at("from"), rule.radius_from);
+  requireLandmark(radius.at("to"), rule.radius_to);
+  rule.radius_fraction = radius.at("fraction").asNumberIn(1e-6, 10.0, "bone lengths");
+  return rule;
+}
+
+}  // namespace
+
 RegionPreset readRegionPreset(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", kPresetCode);
-  in.allowKeys({"$schema", "name", "description", "regions"});
+  in.allowKeys({"$schema", "name", "description", "regions", "creases"});
   RegionPreset preset;
   preset.file = path;
   preset.name = in.has("name") ? in.at("name").asString() : fileStem(path);
@@ -286,6 +325,10 @@ RegionPreset readRegionPreset(const std::string& path) {
       requireLandmark(facing.at("of"), rule.facing_landmark);
     }
     preset.rules.push_back(std::move(rule));
+  }
+  if (in.has("creases")) {
+    JsonReader creases = in.at("creases");
+    for (size_t i = 0; i < creases.arraySize(); ++i) preset.creases.push_back(readCreaseRule(creases.at(i)));
   }
   return preset;
 }

@@ -21,6 +21,12 @@ nlohmann::json moveJson(const MuscleSkinMove& move) {
           {"vertices", move.vertices}};
 }
 
+nlohmann::json contactJson(const CreaseMethodContact& contact) {
+  return {{"closest_mm", contact.opposed ? nlohmann::json(1000.0 * contact.closest) : nlohmann::json(nullptr)},
+          {"through_vertices", contact.through},
+          {"deepest_mm", 1000.0 * contact.deepest}};
+}
+
 }  // namespace
 
 nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
@@ -49,12 +55,28 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
                                   {"centre_of_rotation", 1000.0 * rise[2]}, {"rig", 1000.0 * rise[3]}}},
                                 {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)}};
   }
+  nlohmann::json crease_clips = nlohmann::json::object();
+  for (const ClipQuality& clip : quality.clips) {
+    if (clip.creases.empty()) continue;
+    nlohmann::json per_crease = nlohmann::json::object();
+    for (const CreaseContact& crease : clip.creases) {
+      per_crease[crease.crease] = {{"time_s", crease.time},
+                                   {"bend_deg", crease.bend * 180.0 / 3.14159265358979323846},
+                                   {"input", contactJson(crease.skinning[0])},
+                                   {"dual_quaternion", contactJson(crease.skinning[1])},
+                                   {"centre_of_rotation", contactJson(crease.skinning[2])},
+                                   {"rig", contactJson(crease.skinning[3])}};
+    }
+    crease_clips[clip.clip] = per_crease;
+  }
   return {{"units", {{"volume", "percent change against the bind pose"},
                      {"skin_move", "mm along the input skinning's normal, + out"},
                      {"seam", "mm, largest distance between skin vertices that share a bind position"},
-                     {"roughness", "mm, 95th percentile over the moving skin of |umbrella Laplacian . normal| posed minus bind"}}},
+                     {"roughness", "mm, 95th percentile over the moving skin of |umbrella Laplacian . normal| posed minus bind"},
+                     {"crease", "at the clip's peak bend of each crease: closest approach of opposing skin in mm (null: none within reach), skin vertices through the opposing surface, and the deepest in mm"}}},
           {"seams", {{"places", quality.seam_places}, {"per_clip", seam_clips}}},
           {"surface", {{"per_clip", surface_clips}}},
+          {"creases", {{"per_clip", crease_clips}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
           {"unmeasured_regions", quality.unmeasured_regions},

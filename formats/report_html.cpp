@@ -621,7 +621,8 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
   if (!baked.pictures.empty()) {
     html += "<p class=\"explain\">Each picture: the input skinning, the baked rig, and the rig coloured by its skin's move "
             "along the surface normal against the input skinning (red out, blue in, white none; colour grows with the square root of the move, full at the "
-            "largest). The same camera for the three panels.</p>\n<div class=\"pictures\">\n";
+            "largest). The same camera for the three panels. A crease's picture (the elbow, shoulder, knee or groin at the clip that "
+            "bends it most) shows plain skinning, dual quaternions, centres of rotation and the rig side by side instead.</p>\n<div class=\"pictures\">\n";
     for (size_t i = 0; i < baked.pictures.size(); ++i) {
       const QualityPicture& picture = baked.pictures[i];
       char caption[160];
@@ -629,7 +630,8 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
                     1000.0 * picture.max_out, 1000.0 * picture.max_in);
       html += "<figure><img alt=\"" + esc(picture.title) + "\" width=\"" + std::to_string(picture.image.width) +
               "\" height=\"" + std::to_string(picture.image.height) + "\" src=\"" + picture_uris[i] +
-              "\"><figcaption><b>" + esc(picture.title) + "</b><br>input | rig | move: " + caption + "</figcaption></figure>\n";
+              "\"><figcaption><b>" + esc(picture.title) + "</b><br>" + esc(picture.panels) + ": " +
+              (picture.note.empty() ? std::string(caption) : esc(picture.note)) + "</figcaption></figure>\n";
     }
     html += "</div>\n";
   }

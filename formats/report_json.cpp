@@ -94,6 +94,7 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
                           {"clip", picture.clip},
                           {"time_s", number(picture.time)},
                           {"subject", picture.subject},
+                          {"panels", picture.panels},
                           {"heatmap_full_scale_mm", number(1000.0 * picture.scale)},
                           {"max_out_mm", number(1000.0 * picture.max_out)},
                           {"max_in_mm", number(1000.0 * picture.max_in)}});

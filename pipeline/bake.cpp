@@ -504,7 +504,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     result.quality = std::move(measures.quality);
     measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result.quality);
     measureSurfaceFigures(character, measured, clips, skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
-                          &result.quality);
+                          &result.quality, options.creases);
   }
   timing.quality = lap();
   result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);

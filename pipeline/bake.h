@@ -53,6 +53,8 @@ struct BakeOptions {
   std::vector<HitImpulse> hits;
   // Body regions (anatomy/body_regions.h) for the deformation-quality figures; none: whole body only.
   std::vector<BodyRegion> regions;
+  // Creases (anatomy/creases.h) for the crease contact figures; none: not measured.
+  std::vector<Crease> creases;
   bool measure_quality = true;  // volumes against plain and dual-quaternion skinning, per clip and region
   ResponseMode response = ResponseMode::kAuto;
   ResponseFitOptions fit;

@@ -4,6 +4,8 @@
 // peak compression.
 #include "pipeline/baked_quality.h"
 
+#include "pipeline/centre_of_rotation.h"
+#include "pipeline/crease_contact.h"
 #include "pipeline/seam_opening.h"
 #include "pipeline/surface_figures.h"
 
@@ -78,6 +80,138 @@ RgbImage besideEachOther(const std::vector<RgbImage>& panels) {
 // barely compress shows nothing.
 constexpr double kPictureMinCompression = 0.98;
 
+struct PicturePart {
+  const MeshPart* mesh;
+  const MeasuredPart* weights;
+  VolumeSurface surface;
+  std::vector<int> region_of_triangle;  // index into `regions`, -1 for none
+};
+
+// A picture to draw: one sample of clip `clip`, framed on the welded vertices `on` marks per part.
+struct PictureRequest {
+  std::string title, subject_name;
+  size_t clip = 0;
+  double time = 0.0;
+  std::vector<std::vector<char>> on;
+  // A crease's picture: plain skinning, dual quaternions, centres of rotation and the rig side by side
+  // (no heatmap), with `note` as its caption.
+  bool methods = false;
+  std::string note;
+};
+
+// Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side;
+// each corrective kind where its skin moves most, compressed or stretched (a raised arm's armpit).
+void addMusclePictureRequests(const DeformationQuality& quality, const std::vector<MeasuredClip>& clips,
+                              const std::vector<PicturePart>& drawn, int joint_count, int measured_muscles,
+                              std::vector<PictureRequest>* requests_out) {
+  std::vector<PictureRequest>& requests = *requests_out;
+  auto pictured = [&](size_t m) -> const MuscleSkinMove& {
+    const MuscleQuality& figures = quality.muscles[m];
+    if (figures.kind == PartKind::kMuscle || !figures.stretched.measured) return figures.compressed;
+    if (!figures.compressed.measured) return figures.stretched;
+    return std::abs(figures.stretched.mean) > std::abs(figures.compressed.mean) ? figures.stretched : figures.compressed;
+  };
+  auto better = [&](size_t a, size_t b) {  // is muscle a's picture a better pick than b's for their kind?
+    if (quality.muscles[a].kind == PartKind::kMuscle) return pictured(a).ratio < pictured(b).ratio;
+    return std::abs(pictured(a).mean) > std::abs(pictured(b).mean);
+  };
+  std::map<std::string, int> kind_pick;
+  std::vector<std::string> kind_order;
+  auto kindOf = [](const std::string& name) {
+    for (const char* side : {"Left", "Right"})
+      if (name.rfind(side, 0) == 0) return name.substr(std::string(side).size());
+    return name;
+  };
+  for (size_t m = 0; m < quality.muscles.size(); ++m) {
+    const MuscleSkinMove& move = pictured(m);
+    if (!move.measured) continue;
+    if (quality.muscles[m].kind == PartKind::kMuscle && move.ratio > kPictureMinCompression) continue;
+    if (quality.muscles[m].kind == PartKind::kCorrective && move.max_in + move.max_out <= 0.0) continue;
+    const std::string kind = kindOf(quality.muscles[m].muscle);
+    auto it = kind_pick.find(kind);
+    if (it == kind_pick.end()) {
+      kind_pick[kind] = static_cast<int>(m);
+      kind_order.push_back(kind);
+    } else if (better(m, static_cast<size_t>(it->second))) {
+      it->second = static_cast<int>(m);
+    }
+  }
+  std::vector<std::vector<std::vector<MuscleSkinVertex>>> skin_of_drawn;  // per drawn part, per muscle
+  if (!kind_order.empty()) {
+    for (const PicturePart& part : drawn)
+      skin_of_drawn.push_back(muscleSkin(part.weights->rig, part.surface.vertex_of_weld, joint_count, measured_muscles));
+  }
+  for (const std::string& kind : kind_order) {
+    const int m = kind_pick[kind];
+    const MuscleSkinMove& move = pictured(static_cast<size_t>(m));
+    size_t c = 0;
+    while (c < clips.size() && clips[c].name != move.clip) ++c;
+    if (c == clips.size()) continue;
+    // The muscle's skin, as its figures took it.
+    std::vector<std::vector<char>> on(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      on[p].assign(drawn[p].surface.weldedCount(), 0);
+      for (const MuscleSkinVertex& vertex : skin_of_drawn[p][static_cast<size_t>(m)]) on[p][vertex.welded] = 1;
+    }
+    char ratio[32];
+    std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);
+    const bool stretched = move.ratio > 1.0;
+    requests.push_back({quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") +
+                            " at its most " + (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " +
+                            move.clip + " at " + formatSeconds(move.time),
+                        quality.muscles[m].muscle, c, move.time, std::move(on), false, {}});
+  }
+}
+
+// Each crease kind (elbow, shoulder, knee, groin: the name before its side) at the clip that bends it
+// most, four skinnings side by side, framed on the crease's skin.
+void addCreasePictureRequests(const DeformationQuality& quality, const std::vector<Crease>& creases,
+                              const std::vector<MeasuredPart>& parts, const std::vector<PicturePart>& drawn,
+                              std::vector<PictureRequest>* requests_out) {
+  std::vector<PictureRequest>& requests = *requests_out;
+  std::vector<std::string> crease_kinds;
+  std::map<std::string, std::pair<size_t, const CreaseContact*>> crease_pick;
+  for (size_t c = 0; c < quality.clips.size(); ++c) {
+    for (const CreaseContact& contact : quality.clips[c].creases) {
+      const std::string kind = contact.crease.substr(0, contact.crease.rfind('_'));
+      auto it = crease_pick.find(kind);
+      if (it == crease_pick.end()) {
+        crease_kinds.push_back(kind);
+        crease_pick[kind] = {c, &contact};
+      } else if (contact.bend > it->second.second->bend + 1e-9) {
+        it->second = {c, &contact};
+      }
+    }
+  }
+  for (const std::string& kind : crease_kinds) {
+    const auto [c, contact] = crease_pick[kind];
+    const Crease* crease = nullptr;
+    for (const Crease& candidate : creases)
+      if (candidate.name == contact->crease) crease = &candidate;
+    if (crease == nullptr) continue;
+    std::vector<std::vector<char>> on(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      on[p].assign(drawn[p].surface.weldedCount(), 0);
+      const size_t mesh = static_cast<size_t>(parts[p].mesh_part);
+      for (const std::vector<int>* side : {&crease->proximal[mesh], &crease->distal[mesh]})
+        for (int v : *side) on[p][static_cast<size_t>(drawn[p].surface.weld_of_vertex[static_cast<size_t>(v)])] = 1;
+    }
+    char bend[32];
+    std::snprintf(bend, sizeof(bend), "%.0f", contact->bend * 180.0 / 3.14159265358979323846);
+    std::string note = "skin vertices through the opposing skin:";
+    const char* names[kSurfaceSkinnings] = {"plain", "dual quaternions", "centres of rotation", "rig"};
+    for (int s = 0; s < kSurfaceSkinnings; ++s) {
+      char figure[96];
+      std::snprintf(figure, sizeof(figure), "%s %s %d (%.1f mm deep)", s == 0 ? "" : ",", names[s], contact->skinning[s].through,
+                    1000.0 * contact->skinning[s].deepest);
+      note += figure;
+    }
+    PictureRequest request{"crease " + contact->crease + " bent " + bend + " degrees, " + quality.clips[c].clip + " at " +
+                               formatSeconds(contact->time),
+                           contact->crease, c, contact->time, std::move(on), true, note};
+    requests.push_back(std::move(request));
+  }
+}
 }  // namespace
 
 BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& landmarks, const RegionPreset& preset,
@@ -193,18 +327,13 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
   measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
+  const std::vector<Crease> creases = resolveCreases(folded, landmarks, preset.creases);
   measureSurfaceFigures(character, parts, clips, joint_count, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads,
-                        &out.quality);
+                        &out.quality, creases);
   out.measured = true;
   if (!options.pictures) return out;
 
   // ---- Pictures ----
-  struct PicturePart {
-    const MeshPart* mesh;
-    const MeasuredPart* weights;
-    VolumeSurface surface;
-    std::vector<int> region_of_triangle;  // index into `regions`, -1 for none
-  };
   const double tolerance = 1e-6 * std::max(landmarks.body.height, 1e-3);
   std::vector<PicturePart> drawn;
   for (const MeasuredPart& part : parts) {
@@ -223,13 +352,8 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
       if (std::abs(times[t] - time) < std::abs(times[best] - time)) best = t;
     return best;
   };
-  // A picture to draw: one sample of clip `clip`, framed on the welded vertices `on` marks per part.
-  struct PictureRequest {
-    std::string title, subject_name;
-    size_t clip = 0;
-    double time = 0.0;
-    std::vector<std::vector<char>> on;
-  };
+  // Centres of rotation per drawn part, for the crease pictures only (filled before they are drawn).
+  std::vector<RotationCentres> centres;
   std::vector<PictureRequest> requests;
   // Draws one request into `picture`; false when it frames nothing.
   auto draw = [&](const PictureRequest& request, QualityPicture* drawn_picture) {
@@ -317,8 +441,26 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
       heat.push_back({&rig[p], &drawn[p].surface.whole.triangles, &colours[p]});
     }
     const int size = options.picture_size;
-    picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
-                                     renderSurfaces(heat, camera, size, size)});
+    if (request.methods) {
+      const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
+      std::vector<std::vector<Eigen::Vector3d>> quaternion(drawn.size()), centred(drawn.size());
+      std::vector<RenderSurface> plain_quaternion, plain_centred;
+      for (size_t p = 0; p < drawn.size(); ++p) {
+        const PicturePart& part = drawn[p];
+        quaternion[p] = weldedPositions(part.surface, skinDualQuaternion(part.mesh->positions, part.weights->input, rotations));
+        centred[p] = weldedPositions(
+            part.surface, skinCentreOfRotation(part.mesh->positions, part.weights->input, centres[p], frame, rotations));
+        plain_quaternion.push_back({&quaternion[p], &part.surface.whole.triangles, nullptr});
+        plain_centred.push_back({&centred[p], &part.surface.whole.triangles, nullptr});
+      }
+      picture.panels = "plain skinning | dual quaternions | centres of rotation | rig";
+      picture.note = request.note;
+      picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_quaternion, camera, size, size),
+                                       renderSurfaces(plain_centred, camera, size, size), renderSurfaces(plain_rig, camera, size, size)});
+    } else {
+      picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
+                                       renderSurfaces(heat, camera, size, size)});
+    }
     *drawn_picture = std::move(picture);
     return true;
   };
@@ -352,65 +494,12 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     if (r < 0) continue;
     const double time = figures.regions[worst].rig.time;
     requests.push_back({figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
-                        time, regionVertices(r)});
+                        time, regionVertices(r), false, {}});
   }
-  // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side;
-  // each corrective kind where its skin moves most, compressed or stretched (a raised arm's armpit).
-  auto pictured = [&](size_t m) -> const MuscleSkinMove& {
-    const MuscleQuality& figures = quality.muscles[m];
-    if (figures.kind == PartKind::kMuscle || !figures.stretched.measured) return figures.compressed;
-    if (!figures.compressed.measured) return figures.stretched;
-    return std::abs(figures.stretched.mean) > std::abs(figures.compressed.mean) ? figures.stretched : figures.compressed;
-  };
-  auto better = [&](size_t a, size_t b) {  // is muscle a's picture a better pick than b's for their kind?
-    if (quality.muscles[a].kind == PartKind::kMuscle) return pictured(a).ratio < pictured(b).ratio;
-    return std::abs(pictured(a).mean) > std::abs(pictured(b).mean);
-  };
-  std::map<std::string, int> kind_pick;
-  std::vector<std::string> kind_order;
-  auto kindOf = [](const std::string& name) {
-    for (const char* side : {"Left", "Right"})
-      if (name.rfind(side, 0) == 0) return name.substr(std::string(side).size());
-    return name;
-  };
-  for (size_t m = 0; m < quality.muscles.size(); ++m) {
-    const MuscleSkinMove& move = pictured(m);
-    if (!move.measured) continue;
-    if (quality.muscles[m].kind == PartKind::kMuscle && move.ratio > kPictureMinCompression) continue;
-    if (quality.muscles[m].kind == PartKind::kCorrective && move.max_in + move.max_out <= 0.0) continue;
-    const std::string kind = kindOf(quality.muscles[m].muscle);
-    auto it = kind_pick.find(kind);
-    if (it == kind_pick.end()) {
-      kind_pick[kind] = static_cast<int>(m);
-      kind_order.push_back(kind);
-    } else if (better(m, static_cast<size_t>(it->second))) {
-      it->second = static_cast<int>(m);
-    }
-  }
-  std::vector<std::vector<std::vector<MuscleSkinVertex>>> skin_of_drawn;  // per drawn part, per muscle
-  if (!kind_order.empty()) {
-    for (const PicturePart& part : drawn)
-      skin_of_drawn.push_back(muscleSkin(part.weights->rig, part.surface.vertex_of_weld, joint_count, measured_muscles));
-  }
-  for (const std::string& kind : kind_order) {
-    const int m = kind_pick[kind];
-    const MuscleSkinMove& move = pictured(static_cast<size_t>(m));
-    size_t c = 0;
-    while (c < clips.size() && clips[c].name != move.clip) ++c;
-    if (c == clips.size()) continue;
-    // The muscle's skin, as its figures took it.
-    std::vector<std::vector<char>> on(drawn.size());
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      on[p].assign(drawn[p].surface.weldedCount(), 0);
-      for (const MuscleSkinVertex& vertex : skin_of_drawn[p][static_cast<size_t>(m)]) on[p][vertex.welded] = 1;
-    }
-    char ratio[32];
-    std::snprintf(ratio, sizeof(ratio), "%.2f", move.ratio);
-    const bool stretched = move.ratio > 1.0;
-    requests.push_back({quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") +
-                            " at its most " + (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " +
-                            move.clip + " at " + formatSeconds(move.time),
-                        quality.muscles[m].muscle, c, move.time, std::move(on)});
+  addMusclePictureRequests(quality, clips, drawn, joint_count, measured_muscles, &requests);
+  addCreasePictureRequests(quality, creases, parts, drawn, &requests);
+  if (std::any_of(requests.begin(), requests.end(), [](const PictureRequest& request) { return request.methods; })) {
+    for (const PicturePart& part : drawn) centres.push_back(optimizedRotationCentres(*part.mesh, part.weights->input, options.threads));
   }
   // Each picture on its own (the requests only read the frames, the surfaces and the figures), in the
   // requests' order.

@@ -238,8 +238,11 @@ struct QualityPicture {
   std::string subject;  // the region or muscle framed
   double scale = 0.0;   // scene units at full heatmap colour
   double max_out = 0.0, max_in = 0.0;  // displacement of the rig along the input's normal, scene units
-  // One image: input skinning | baked rig | heatmap of the rig's displacement (red out, blue in).
+  // One image: input skinning | baked rig | heatmap of the rig's displacement (red out, blue in), or
+  // for a crease the four skinnings side by side (`panels` names them, `note` has the crease's figures).
   RgbImage image;
+  std::string panels = "input | rig | move";
+  std::string note;
 };
 
 struct BakedQuality {

@@ -71,11 +71,28 @@ struct SurfaceFigures {
   VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation
 };
 
+// Opposing skin at a crease (pipeline/crease_contact.h), one skinning at the crease's peak bend.
+struct CreaseMethodContact {
+  bool opposed = false;  // some skin faces skin across the crease within reach
+  double closest = 0.0;  // scene units: the closest approach of opposing skin (when opposed)
+  int through = 0;       // skin vertices behind the opposing skin's surface
+  double deepest = 0.0;  // scene units: how far the deepest of them is behind it
+};
+// One crease of one clip: the sample where its bend peaks, and the four skinnings' contact there
+// (input, dual quaternions, centres of rotation, rig, as SurfaceFigures).
+struct CreaseContact {
+  std::string crease;
+  double time = 0.0;
+  double bend = 0.0;  // radians: the distal joint's turn relative to the proximal one since bind
+  CreaseMethodContact skinning[kSurfaceSkinnings];
+};
+
 struct ClipQuality {
   std::string clip;
   SkinningVolumes body;
   SeamOpening seams;
   SurfaceFigures surface;
+  std::vector<CreaseContact> creases;  // the creases this clip bends at least kMinCreaseBend
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks
 };

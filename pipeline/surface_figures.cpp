@@ -5,6 +5,7 @@
 #include <cassert>
 
 #include "pipeline/centre_of_rotation.h"
+#include "pipeline/crease_contact.h"
 #include "pipeline/parallel.h"
 #include "pipeline/skin_volume.h"
 #include "pipeline/skinning.h"
@@ -140,6 +141,41 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
   return figures;
 }
 
+
+// One crease at one sample: its two sides posed by each skinning, with their normals, and their contact.
+CreaseContact measureCrease(const Character& character, const std::vector<MeasuredPart>& parts,
+                            const std::vector<SurfacePart>& surfaces, const Crease& crease, const SkinFrame& frame) {
+  const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
+  std::array<CreaseSide, kSurfaceSkinnings> proximal, distal;
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const size_t mesh = static_cast<size_t>(parts[p].mesh_part);
+    if (crease.proximal[mesh].empty() && crease.distal[mesh].empty()) continue;
+    const std::vector<Eigen::Vector3d>& bind = character.meshes[mesh].positions;
+    const SurfacePart& part = surfaces[p];
+    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {
+        skinLinearBlend(bind, parts[p].input, frame), skinDualQuaternion(bind, parts[p].input, rotations),
+        skinCentreOfRotation(bind, parts[p].input, part.centres, frame, rotations), skinLinearBlend(bind, parts[p].rig, frame)};
+    for (int s = 0; s < kSurfaceSkinnings; ++s) {
+      const std::vector<Eigen::Vector3d> normals = vertexNormals(part.surface.whole, weldedPositions(part.surface, posed[s]));
+      auto add = [&](const std::vector<int>& vertices, CreaseSide* side) {
+        for (int v : vertices) {
+          side->bind.push_back(bind[static_cast<size_t>(v)]);
+          side->posed.push_back(posed[s][static_cast<size_t>(v)]);
+          side->normal.push_back(normals[static_cast<size_t>(part.surface.weld_of_vertex[static_cast<size_t>(v)])]);
+        }
+      };
+      add(crease.proximal[mesh], &proximal[s]);
+      add(crease.distal[mesh], &distal[s]);
+    }
+  }
+  CreaseContact contact;
+  contact.crease = crease.name;
+  contact.bend = relativeTurn(frame[static_cast<size_t>(crease.proximal_joint)], frame[static_cast<size_t>(crease.distal_joint)]);
+  // Skin closer than a quarter of the crease's reach at bind is the same skin across the fold's line.
+  for (int s = 0; s < kSurfaceSkinnings; ++s) contact.skinning[s] = creaseContact(proximal[s], distal[s], 0.25 * crease.radius);
+  return contact;
+}
+
 }  // namespace
 
 std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& figures) {
@@ -160,7 +196,7 @@ std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& 
 
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
                            const std::vector<MeasuredClip>& clips, int skeleton_joints, double weld_tolerance, int threads,
-                           DeformationQuality* quality) {
+                           DeformationQuality* quality, const std::vector<Crease>& creases) {
   assert(quality->clips.size() == clips.size());
   if (parts.empty()) return;
   std::vector<SurfacePart> surfaces;
@@ -187,6 +223,34 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
     const double change = bind_volume != 0.0 ? figures[i].volume / bind_volume - 1.0 : 0.0;
     if (std::abs(change) > std::abs(surface.centre_of_rotation.change)) surface.centre_of_rotation = {change, clips[c].times[t]};
   }
+  // Creases: per clip and crease, the sample where the bend peaks (the first of equal ones).
+  struct CreaseSample {
+    size_t clip, crease, frame;
+  };
+  std::vector<CreaseSample> crease_samples;
+  for (size_t c = 0; c < clips.size(); ++c) {
+    const std::vector<SkinFrame>& frames = *clips[c].frames;
+    for (size_t k = 0; k < creases.size(); ++k) {
+      const size_t a = static_cast<size_t>(creases[k].proximal_joint), b = static_cast<size_t>(creases[k].distal_joint);
+      double peak = 0.0;
+      size_t at = 0;
+      for (size_t t = 0; t < frames.size(); ++t) {
+        const double bend = relativeTurn(frames[t][a], frames[t][b]);
+        if (bend > peak) {
+          peak = bend;
+          at = t;
+        }
+      }
+      if (peak >= kMinCreaseBend) crease_samples.push_back({c, k, at});
+    }
+  }
+  std::vector<CreaseContact> contacts(crease_samples.size());
+  parallelForEach(threads, crease_samples.size(), [&](size_t i) {
+    const CreaseSample& sample = crease_samples[i];
+    contacts[i] = measureCrease(character, parts, surfaces, creases[sample.crease], (*clips[sample.clip].frames)[sample.frame]);
+    contacts[i].time = clips[sample.clip].times[sample.frame];
+  });
+  for (size_t i = 0; i < crease_samples.size(); ++i) quality->clips[crease_samples[i].clip].creases.push_back(std::move(contacts[i]));
 }
 
 }  // namespace rigbake

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "anatomy/character.h"
+#include "anatomy/creases.h"
 #include "pipeline/deformation_quality.h"
 
 namespace rigbake {
@@ -22,10 +23,12 @@ namespace rigbake {
 // times the rest of the bake.
 std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& figures);
 
-// Fills each clip's `surface` in `quality` (clips in the same order). Muscle joints are those at or
-// above `skeleton_joints` in the parts' rig weights. The same figures at any thread count.
+// Fills each clip's `surface` and `creases` in `quality` (clips in the same order). Muscle joints are
+// those at or above `skeleton_joints` in the parts' rig weights. Each crease (anatomy/creases.h) is
+// measured at the sample of each clip where its bend peaks, when that is at least kMinCreaseBend
+// (pipeline/crease_contact.h). The same figures at any thread count.
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
                            const std::vector<MeasuredClip>& clips, int skeleton_joints, double weld_tolerance, int threads,
-                           DeformationQuality* quality);
+                           DeformationQuality* quality, const std::vector<Crease>& creases = {});
 
 }  // namespace rigbake
