@@ -92,7 +92,7 @@ TEST_CASE("bake: every baked file passes the Khronos glTF validator with 0 error
   }
 }
 
-TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy, every skin and every clip") {
+TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy, every skin and every clip", "[shared:bakes-at-ten]") {
   for (const BakedCharacter& baked : bakedAtTen()) {
     INFO(baked.path);
     test::TempDir dir;
@@ -155,7 +155,7 @@ TEST_CASE("bake: the baked file reloads with the muscle joints in the hierarchy,
   }
 }
 
-TEST_CASE("bake: at the bind pose the baked skin reproduces the original vertices") {
+TEST_CASE("bake: at the bind pose the baked skin reproduces the original vertices", "[shared:bakes-at-ten]") {
   for (const BakedCharacter& baked : bakedAtTen()) {
     INFO(baked.path);
     test::TempDir dir;
@@ -212,14 +212,10 @@ TEST_CASE("bake: packed influences decode to exactly the quantized weights on ev
   }
 }
 
-TEST_CASE("bake: two bakes of the same inputs are byte-identical") {
-  for (const std::string& path : characterPaths()) {
-    INFO(path);
-    CHECK(bakeFile(path, 7).bytes == bakeFile(path, 7).bytes);
-  }
-}
+// Two bakes of the same inputs give the same bytes: parallel_test.cpp's determinism test, which bakes
+// every character at 1, 2 and 3 threads.
 
-TEST_CASE("bake: the muscles' share of the weights comes from the joints they span") {
+TEST_CASE("bake: the muscles' share of the weights comes from the joints they span", "[shared:bakes-at-ten]") {
   for (const BakedCharacter& baked : bakedAtTen()) {
     INFO(baked.path);
     const Skeleton& skeleton = baked.loaded.character.skeleton;
@@ -248,7 +244,7 @@ TEST_CASE("bake: the muscles' share of the weights comes from the joints they sp
   }
 }
 
-TEST_CASE("bake: a corrective takes weight from its carrier only, where the skin blends the two sides of its span") {
+TEST_CASE("bake: a corrective takes weight from its carrier only, where the skin blends the two sides of its span", "[shared:bakes-at-ten]") {
   // Plain skinning stretches a web only where it blends joints that move apart; skin one side holds
   // alone moves rigidly and needs no correcting. KayKit's rigid segments and RobotExpressive's
   // hands-only skin blend nowhere at the armpit, and give the correctives no skin at all.
@@ -305,7 +301,7 @@ TEST_CASE("bake: a corrective takes weight from its carrier only, where the skin
   }
 }
 
-TEST_CASE("bake: each clip's reported peak is the vertex and time where the rounded skin moves most") {
+TEST_CASE("bake: each clip's reported peak is the vertex and time where the rounded skin moves most", "[shared:bakes-at-ten]") {
   for (const BakedCharacter& baked : bakedAtTen()) {
     const Character& character = baked.loaded.character;
     const Skeleton& skeleton = character.skeleton;

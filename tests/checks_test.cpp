@@ -30,7 +30,7 @@ bool anyFindingAt(const CheckResult& check, const std::string& location_prefix) 
 
 }  // namespace
 
-TEST_CASE("checks: every error-severity check passes on the sample and every shared asset, with real numbers") {
+TEST_CASE("checks: every error-severity check passes on the sample and every shared asset, with real numbers", "[shared:validated-bakes]") {
   for (const auto& baked : test::validatedBakes()) {
     INFO(baked->source);
     const Report report = validate(baked->inputs());
@@ -115,7 +115,7 @@ TEST_CASE("checks: every error-severity check passes on the sample and every sha
   }
 }
 
-TEST_CASE("checks: the ratio series are evaluateMuscle() at each clip's key times") {
+TEST_CASE("checks: the ratio series are evaluateMuscle() at each clip's key times", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   const Character& character = sample.loaded.character;
   REQUIRE(!character.clips.empty());
@@ -136,7 +136,7 @@ TEST_CASE("checks: the ratio series are evaluateMuscle() at each clip's key time
   CHECK(furthest > 0.01);
 }
 
-TEST_CASE("checks: a locator 1 m off the body fails LOCATOR_NEAR_SURFACE at that locator") {
+TEST_CASE("checks: a locator 1 m off the body fails LOCATOR_NEAR_SURFACE at that locator", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   MuscleSet moved = sample.muscles;
   moved.parts[2].insertion.world += sample.landmarks.body.forward * 1.0;
@@ -159,7 +159,7 @@ TEST_CASE("checks: a locator 1 m off the body fails LOCATOR_NEAR_SURFACE at that
   CHECK(checkOf(report, "WEIGHTS_SUM").status == CheckStatus::kPass);
 }
 
-TEST_CASE("checks: an asymmetric locator is a LOCATOR_SYMMETRY warning, which does not fail the report") {
+TEST_CASE("checks: an asymmetric locator is a LOCATOR_SYMMETRY warning, which does not fail the report", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   MuscleSet moved = sample.muscles;
   const double height = sample.landmarks.body.height;
@@ -185,7 +185,7 @@ TEST_CASE("checks: an asymmetric locator is a LOCATOR_SYMMETRY warning, which do
   CHECK(checkOf(good, "LOCATOR_SYMMETRY").measured < 0.005);
 }
 
-TEST_CASE("checks: a muscle band narrower than the motion fails MUSCLE_RATIO_IN_RANGE") {
+TEST_CASE("checks: a muscle band narrower than the motion fails MUSCLE_RATIO_IN_RANGE", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   MuscleSet narrow = sample.muscles;
   for (MusclePart& part : narrow.parts) {
@@ -205,7 +205,7 @@ TEST_CASE("checks: a muscle band narrower than the motion fails MUSCLE_RATIO_IN_
   CHECK(!validate(inputs, strict).passed());
 }
 
-TEST_CASE("checks: corrupted weights and indices fail the glTF skinning checks, naming the accessor") {
+TEST_CASE("checks: corrupted weights and indices fail the glTF skinning checks, naming the accessor", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   REQUIRE(!sample.file.skins.empty());
   const int slots = sample.file.skins[0].slots;
@@ -256,7 +256,7 @@ TEST_CASE("checks: corrupted weights and indices fail the glTF skinning checks, 
   }
 }
 
-TEST_CASE("checks: packed weights that disagree with WEIGHTS_n fail PACKED_DEFORMATION_ERROR") {
+TEST_CASE("checks: packed weights that disagree with WEIGHTS_n fail PACKED_DEFORMATION_ERROR", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   BakedFileData file = sample.file;
   FileSkinAttributes& skin = file.skins[0];
@@ -277,7 +277,7 @@ TEST_CASE("checks: packed weights that disagree with WEIGHTS_n fail PACKED_DEFOR
   CHECK(checkOf(good, "PACKED_DEFORMATION_ERROR").measured < 1e-4);
 }
 
-TEST_CASE("checks: GLTF_STRUCTURE names muscles missing from the bake and clips that do not animate them") {
+TEST_CASE("checks: GLTF_STRUCTURE names muscles missing from the bake and clips that do not animate them", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   SECTION("a muscle file with a muscle the bake lacks") {
     MuscleSet more = sample.muscles;
@@ -312,7 +312,7 @@ TEST_CASE("checks: GLTF_STRUCTURE names muscles missing from the bake and clips 
   }
 }
 
-TEST_CASE("checks: without a muscle file or landmarks the dependent checks are skipped with a reason") {
+TEST_CASE("checks: without a muscle file or landmarks the dependent checks are skipped with a reason", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   ValidationInputs inputs = sample.inputs();
   inputs.muscles = nullptr;
@@ -334,7 +334,7 @@ TEST_CASE("checks: without a muscle file or landmarks the dependent checks are s
   CHECK(!report.passed());
 }
 
-TEST_CASE("checks: a config file changes thresholds and severities, and rejects unknown codes and keys") {
+TEST_CASE("checks: a config file changes thresholds and severities, and rejects unknown codes and keys", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   test::TempDir dir;
   const std::string path = dir / "config.json";
@@ -372,7 +372,7 @@ TEST_CASE("checks: a config file changes thresholds and severities, and rejects 
         "VALIDATE_CONFIG_INVALID " + path + "#/checks/WEIGHTS_SUM/threshold");
 }
 
-TEST_CASE("checks: the body figure's silhouettes span the body height, and bones exclude muscle joints") {
+TEST_CASE("checks: the body figure's silhouettes span the body height, and bones exclude muscle joints", "[shared:validated-bakes]") {
   const test::ValidatedBake& sample = test::validatedSample();
   const Figure figure = bodyFigure(sample.loaded.character, sample.landmarks, &sample.muscles);
   for (const Silhouette* s : {&figure.front, &figure.side}) {

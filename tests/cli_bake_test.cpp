@@ -111,26 +111,8 @@ TEST_CASE("cli bake: --gltf-weights unorm16 writes finer WEIGHTS_n and leaves th
   CHECK(largestOffMilliLattice(dir / "unorm16.glb") > 0.1);
 }
 
-TEST_CASE("cli bake: the same inputs give byte-identical files, with or without huge pages") {
-  TempDir dir;
-  REQUIRE(runCli("place " + sampleGlbPathForCli() + " -o " + (dir / "muscles.json")).exit_code == 0);
-  for (const char* name : {"a", "b"}) {
-    std::string n = name;
-    // b opts out of the restart onto huge pages and one arena (cli/huge_pages.cpp): the allocator never
-    // reaches a byte.
-    REQUIRE(runCli("bake " + sampleGlbPathForCli() + " --muscles " + (dir / "muscles.json") + " --influences 7 -o " +
-                   (dir / (n + ".glb")) + " --stats " + (dir / (n + ".json")) + " --packed-out " + (dir / (n + ".rbpk")),
-                   n == "b" ? "GLIBC_TUNABLES=glibc.malloc.hugetlb=0" : "")
-                .exit_code == 0);
-  }
-  CHECK(slurp(dir / "a.glb") == slurp(dir / "b.glb"));
-  CHECK(slurp(dir / "a.rbpk") == slurp(dir / "b.rbpk"));
-  // The stats name their own output file, so compare them without it.
-  nlohmann::json a = nlohmann::json::parse(slurp(dir / "a.json")), b = nlohmann::json::parse(slurp(dir / "b.json"));
-  a.erase("output");
-  b.erase("output");
-  CHECK(a == b);
-}
+// The same inputs give byte-identical files with or without huge pages: parallel_test.cpp's CLI
+// determinism test, at 1, 2 and 3 threads.
 
 TEST_CASE("cli bake: --progress always names each stage and the fit's passes in order, and the files do not change") {
   TempDir dir;

@@ -64,7 +64,7 @@ std::string vertexName(const std::string& part, int v) { return part + " vertex 
 
 }  // namespace
 
-TEST_CASE("checkInfluences accepts every shared asset and names each kind of problem") {
+TEST_CASE("checkInfluences accepts every shared asset and names each kind of problem", "[shared:asset-influences]") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
       INFO(part.name);
@@ -100,7 +100,7 @@ TEST_CASE("influencesFromMesh keeps the file's slots and parks zero weights on j
   CHECK(set.weights == std::vector<double>{0.75, 0.25, 0.0, 0.0});
 }
 
-TEST_CASE("pruning keeps the largest weights, breaks ties by joint index and renormalizes") {
+TEST_CASE("pruning keeps the largest weights, breaks ties by joint index and renormalizes", "[shared:asset-influences]") {
   SECTION("a hand-made vertex with four equal weights and a repeated joint") {
     InfluenceSet set;
     set.slots_per_vertex = 4;
@@ -182,7 +182,7 @@ TEST_CASE("pruning keeps the largest weights, breaks ties by joint index and ren
   }
 }
 
-TEST_CASE("0.001 quantization sums to exactly 1000 by largest remainder on every vertex") {
+TEST_CASE("0.001 quantization sums to exactly 1000 by largest remainder on every vertex", "[shared:asset-influences]") {
   SECTION("hand-made vertices") {
     InfluenceSet set;
     set.slots_per_vertex = 4;
@@ -250,7 +250,7 @@ TEST_CASE("0.001 quantization sums to exactly 1000 by largest remainder on every
   }
 }
 
-TEST_CASE("glTF JOINTS_n/WEIGHTS_n sum to exactly 255 or 65535 with legal joints on every vertex") {
+TEST_CASE("glTF JOINTS_n/WEIGHTS_n sum to exactly 255 or 65535 with legal joints on every vertex", "[shared:asset-influences]") {
   SECTION("the worked example of docs/packed-influences.md") {
     QuantizedInfluences q;
     q.slots_per_vertex = 7;
@@ -432,7 +432,7 @@ QuantizationFigures measureQuantization(const test::AssetInfluences& asset, bool
 
 }  // namespace
 
-TEST_CASE("0.001 weights move no vertex of a shared asset by 0.1 mm per metre of character height") {
+TEST_CASE("0.001 weights move no vertex of a shared asset by 0.1 mm per metre of character height", "[shared:asset-influences]") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     const double tolerance = 1e-4 * asset.height;  // 0.1 mm for every metre of height
     for (int budget : kPackedInfluenceCounts) {
@@ -449,7 +449,7 @@ TEST_CASE("0.001 weights move no vertex of a shared asset by 0.1 mm per metre of
   }
 }
 
-TEST_CASE("every vertex's quantization error stays within the bound largest remainder guarantees") {
+TEST_CASE("every vertex's quantization error stays within the bound largest remainder guarantees", "[shared:asset-influences]") {
   // With d_k = w_quantized - w_exact summing to 0, the displacement sum_k d_k M_k p is the positive part
   // minus the negative part, each sum|d|/2 times a convex combination of the points M_k p: at most
   // sum|d| / 2 times the largest distance between two of them. Largest remainder keeps every |d_k|

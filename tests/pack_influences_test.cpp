@@ -113,7 +113,7 @@ TEST_CASE("pack rejects input outside its contract") {
   CHECK(errorCodeOf([&] { packInfluences(short_sum, 15, 1); }) == "INTERNAL");
 }
 
-TEST_CASE("decode(pack(w)) is the 0.001 weights exactly, on every vertex, at 4, 7, 10 and both index widths") {
+TEST_CASE("decode(pack(w)) is the 0.001 weights exactly, on every vertex, at 4, 7, 10 and both index widths", "[shared:asset-influences]") {
   int parts_checked = 0;
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
@@ -147,7 +147,7 @@ TEST_CASE("decode(pack(w)) is the 0.001 weights exactly, on every vertex, at 4, 
   if (!test::assetInfluences().empty()) CHECK(parts_checked > 0);
 }
 
-TEST_CASE("the glTF carrier is legal custom attributes that hold the packed bytes unchanged") {
+TEST_CASE("the glTF carrier is legal custom attributes that hold the packed bytes unchanged", "[shared:asset-influences]") {
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     for (const test::PartInfluences& part : asset.parts) {
       for (int budget : kPackedInfluenceCounts) {
@@ -213,7 +213,7 @@ TEST_CASE("the glTF carrier is legal custom attributes that hold the packed byte
   }
 }
 
-TEST_CASE("the packed file round-trips, is deterministic and refuses damaged bytes") {
+TEST_CASE("the packed file round-trips, is deterministic and refuses damaged bytes", "[shared:asset-influences]") {
   std::vector<PackedInfluences> parts;
   for (const test::AssetInfluences& asset : test::assetInfluences()) {
     if (asset.asset != "Quaternius_ModularWomen_Soldier.glb") continue;

@@ -49,7 +49,7 @@ bool parsesAsXml(const std::string& path) {
 
 }  // namespace
 
-TEST_CASE("report json: every check with code, severity, threshold, measured value, status and location") {
+TEST_CASE("report json: every check with code, severity, threshold, measured value, status and location", "[shared:validated-bakes]") {
   const std::string text = reportJson(failingReport());
   // Fields in the documented order, not sorted: the version and tool first, then the character.
   CHECK(text.rfind("{\n  \"report_version\": ", 0) == 0);
@@ -81,7 +81,7 @@ TEST_CASE("report json: every check with code, severity, threshold, measured val
   CHECK(json["plots"]["packed_deformation"][0]["max_m"].get<double>() < 0.0005);
 }
 
-TEST_CASE("report junit: well-formed, one testcase per check, counts that match, failures only at error severity") {
+TEST_CASE("report junit: well-formed, one testcase per check, counts that match, failures only at error severity", "[shared:validated-bakes]") {
   test::TempDir dir;
   const std::string xml = reportJunit({sampleReport(), failingReport()});
   const std::string path = dir / "report.junit.xml";
@@ -115,7 +115,7 @@ TEST_CASE("report junit: well-formed, one testcase per check, counts that match,
   CHECK(xml.find("warning (not failing the build)") != std::string::npos);
 }
 
-TEST_CASE("report junit: names and messages are escaped") {
+TEST_CASE("report junit: names and messages are escaped", "[shared:validated-bakes]") {
   Report report = sampleReport();
   // A file name is bytes: one that is not UTF-8 (\xFF) must not make the XML ill-formed; valid UTF-8
   // (\xC3\xA9) stays.
@@ -140,7 +140,7 @@ TEST_CASE("report: json, junit and html are byte-identical for the same inputs")
   CHECK(reportHtml(again) == reportHtml(sampleReport()));
 }
 
-TEST_CASE("report html: self-contained, with every plot") {
+TEST_CASE("report html: self-contained, with every plot", "[shared:validated-bakes]") {
   const std::string html = reportHtml(failingReport());
   // Nothing to fetch: no script, stylesheet link, external image, font or url().
   for (const char* forbidden : {"<script", "<link", "src=", "url(", "@import", "@font-face", "https://"})

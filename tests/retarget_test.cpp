@@ -131,7 +131,7 @@ std::string positionsOnly(const MuscleSet& muscles, const Skeleton& skeleton) {
 
 }  // namespace
 
-TEST_CASE("retargeting the preset placement lands near the direct placement for every ordered pair") {
+TEST_CASE("retargeting the preset placement lands near the direct placement for every ordered pair", "[shared:placed-characters]") {
   const std::vector<Placed>& all = characters();
   REQUIRE(all.size() >= 2);
   // Set RIGBAKE_PRINT_RETARGET_TABLE=1 to print the figures docs/retarget.md quotes.
@@ -169,7 +169,7 @@ TEST_CASE("retargeting the preset placement lands near the direct placement for 
   }
 }
 
-TEST_CASE("retargeting a character onto itself is the identity") {
+TEST_CASE("retargeting a character onto itself is the identity", "[shared:placed-characters]") {
   for (const Placed& a : characters()) {
     INFO(a.name);
     MuscleSet same = retarget(a.muscles, a, a);
@@ -178,7 +178,7 @@ TEST_CASE("retargeting a character onto itself is the identity") {
   }
 }
 
-TEST_CASE("retargeting onto a scaled turned and moved copy applies that similarity") {
+TEST_CASE("retargeting onto a scaled turned and moved copy applies that similarity", "[shared:placed-characters]") {
   // A character exported in centimetres, facing the other way and standing elsewhere is the same body:
   // retargeting onto it must give exactly the transformed locators.
   static const std::vector<NamingMap> maps = readNamingMaps(test::presetsDir() + "/skeletons");
@@ -213,7 +213,7 @@ TEST_CASE("retargeting onto a scaled turned and moved copy applies that similari
   }
 }
 
-TEST_CASE("the talk's positions-only files retarget like full rigbake files") {
+TEST_CASE("the talk's positions-only files retarget like full rigbake files", "[shared:placed-characters]") {
   test::TempDir dir;
   const std::vector<Placed>& all = characters();
   for (const Placed& a : all) {
@@ -240,7 +240,7 @@ TEST_CASE("the talk's positions-only files retarget like full rigbake files") {
   CHECK(locatorDistances(reread, retarget(a.muscles, a, b)).max <= 1e-9 * b.resolved.landmarks.body.height);
 }
 
-TEST_CASE("a locator on a joint with no landmark on or above it is refused before anything moves") {
+TEST_CASE("a locator on a joint with no landmark on or above it is refused before anything moves", "[shared:placed-characters]") {
   const Placed& a = characters().front();
   Placed with_prop = a;
   Skeleton& skeleton = with_prop.resolved.character.skeleton;
@@ -265,7 +265,7 @@ TEST_CASE("a locator on a joint with no landmark on or above it is refused befor
   }
 }
 
-TEST_CASE("hand-tuned parts the preset lacks ride on the landmark of their joint") {
+TEST_CASE("hand-tuned parts the preset lacks ride on the landmark of their joint", "[shared:placed-characters]") {
   const std::vector<Placed>& all = characters();
   const Placed& a = all.front();
   const Placed& b = all.back();
