@@ -378,16 +378,23 @@ std::vector<float> readFloats(const std::string& path) {
   return values;
 }
 
-TEST_CASE("runtime C API: a C program on the shared library computes what the in-process API does, bit for bit") {
+TEST_CASE("runtime C API: a C program and Python ctypes on the shared library compute what the in-process API does, bit for bit") {
   const Bake& bake = sampleRuntime();
   TempDir dir;
   const FrameInputs in = writeFrameInputs(bake, dir, 1);
-  const std::string out_path = dir / "out.f32";
-  REQUIRE(std::system((std::string(RIGBAKE_RUNTIME_C_CHECK) + " " + programArguments(bake, in, out_path)).c_str()) == 0);
   const std::vector<float> expected = inProcessFrames(bake, in);
-  const std::vector<float> written = readFloats(out_path);
-  REQUIRE(written.size() == expected.size());
-  CHECK(std::memcmp(written.data(), expected.data(), written.size() * sizeof(float)) == 0);
+  // The C99 program, and the Python script loading the library the program links (as Blender's add-on does).
+  const std::string library = RIGBAKE_RUNTIME_LIBRARY;
+  for (const std::string& program : {std::string(RIGBAKE_RUNTIME_C_CHECK),
+                                     "/usr/bin/python3 " + std::string(RIGBAKE_SOURCE_DIR) + "/tests/runtime_ctypes_check.py " + library}) {
+    INFO(program);
+    const std::string out_path = dir / "out.f32";
+    std::remove(out_path.c_str());
+    REQUIRE(std::system((program + " " + programArguments(bake, in, out_path)).c_str()) == 0);
+    const std::vector<float> written = readFloats(out_path);
+    REQUIRE(written.size() == expected.size());
+    CHECK(std::memcmp(written.data(), expected.data(), written.size() * sizeof(float)) == 0);
+  }
 }
 
 TEST_CASE("runtime C API: the WebAssembly build in node matches the native float C API within 1e-5 on every clip (sample, CesiumMan)") {
