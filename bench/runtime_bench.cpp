@@ -6,6 +6,12 @@
 //     RIGBAKE_muscle_rig extension, read back as validate reads it), over every frame of every clip:
 //     nanoseconds per evaluation of the whole rig, skinned matrices only and with the helpers.
 //
+//   runtime_bench capi BAKED.glb OUT_DIR
+//     the C API (runtime/rigbake_runtime.h, float) on the same rig, built from the extension's JSON text:
+//     nanoseconds per rigbake_rig_evaluate over every key time of every clip (windows of 64 frames,
+//     the fastest of kPasses passes per window, the mean over every frame). Writes OUT_DIR/extension.json and OUT_DIR/poses.f32 (the
+//     frames' node matrices) for tests/runtime_wasm_check.mjs to time the WebAssembly build on.
+//
 //   runtime_bench jiggle INPUT PRESETS_DIR MUSCLE_PRESET JIGGLE_PRESET
 //     runtime::JiggleJob<float> and <double> on the jiggles a bake of INPUT resolves from
 //     JIGGLE_PRESET (as `rigbake bake --jiggle`), driven as an engine drives them at 30 and 60 fps:
@@ -17,6 +23,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -38,6 +47,7 @@
 #include "runtime/jiggle.h"
 #include "runtime/muscle_rig.h"
 #include "runtime/muscle_rig_convert.h"
+#include "runtime/rigbake_runtime.h"
 
 using namespace rigbake;
 
@@ -291,18 +301,85 @@ int benchJiggle(const std::string& input, const std::string& presets, const std:
   return 0;
 }
 
+// The C API's float evaluation over every key time of every clip, as the WebAssembly build is timed on
+// the same frames (tests/runtime_wasm_check.mjs with BENCH set).
+int benchCapi(const std::string& baked, const std::string& out_dir) {
+  const std::string bytes = [&] {
+    std::ifstream in(baked, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  std::uint32_t json_length = 0;
+  if (bytes.size() < 20) throw std::runtime_error(baked + " is not a GLB");
+  std::memcpy(&json_length, bytes.data() + 12, 4);
+  const nlohmann::json gltf = nlohmann::json::parse(bytes.substr(20, json_length));
+  const std::string extension = gltf.at("extensions").at(kMuscleRigExtension).dump();
+  const int node_count = static_cast<int>(gltf.at("nodes").size());
+  rigbake_rig* rig = rigbake_rig_create(extension.data(), extension.size(), node_count);
+  if (!rig) throw std::runtime_error(baked + ": " + rigbake_last_error());
+  LoadedCharacter loaded = loadCharacter(baked);
+  const Skeleton& skeleton = loaded.character.skeleton;
+  std::vector<float> frames;
+  for (const Clip& clip : loaded.character.clips) {
+    for (double t : sampleTimes(clip, 0.0)) {
+      const Pose pose = sampleClip(skeleton, clip, t);
+      std::vector<float> nodes(16 * static_cast<size_t>(node_count), 0.0f);
+      for (int j = 0; j < skeleton.size(); ++j)
+        for (int k = 0; k < 16; ++k) nodes[16 * static_cast<size_t>(skeleton.nodes[j]) + k] = static_cast<float>(pose.world[j].matrix().data()[k]);
+      frames.insert(frames.end(), nodes.begin(), nodes.end());
+    }
+  }
+  const size_t per_frame = 16 * static_cast<size_t>(node_count), frame_count = frames.size() / per_frame;
+  if (frame_count == 0) throw std::runtime_error(baked + " has no clip to time the rig on");
+  std::vector<float> skinned(16 * static_cast<size_t>(rigbake_rig_muscle_count(rig)));
+  // As rigNanoseconds times the job, and tests/runtime_wasm_check.mjs the WebAssembly build: windows of
+  // 64 consecutive frames, per window the fastest of kPasses passes, summed: the mean over every frame.
+  // Half a second of warm-up first, as the WebAssembly build gets.
+  constexpr size_t kWindowFrames = 64;
+  auto run = [&](size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) rigbake_rig_evaluate(rig, frames.data() + f * per_frame, skinned.data(), nullptr, nullptr);
+  };
+  for (const Clock::time_point warm = Clock::now(); secondsSince(warm) < 0.5;) run(0, frame_count);
+  double seconds = 0.0;
+  for (size_t begin = 0; begin < frame_count; begin += kWindowFrames) {
+    const size_t end = std::min(frame_count, begin + kWindowFrames);
+    double fastest = 0.0;
+    for (int pass = 0; pass < kPasses; ++pass) {
+      const Clock::time_point start = Clock::now();
+      run(begin, end);
+      const double elapsed = secondsSince(start);
+      if (pass == 0 || elapsed < fastest) fastest = elapsed;
+    }
+    seconds += fastest;
+  }
+  const double fastest = seconds;
+  g_sink = g_sink + static_cast<double>(skinned[12]);
+  std::ofstream(out_dir + "/extension.json", std::ios::binary) << extension;
+  std::ofstream(out_dir + "/poses.f32", std::ios::binary).write(reinterpret_cast<const char*>(frames.data()), frames.size() * sizeof(float));
+  std::cout << nlohmann::json{{"input", baked},
+                              {"muscles", rigbake_rig_muscle_count(rig)},
+                              {"nodes", node_count},
+                              {"frames", frame_count},
+                              {"native_float_ns", 1e9 * fastest / static_cast<double>(frame_count)}}
+                   .dump()
+            << "\n";
+  rigbake_rig_destroy(rig);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string mode = argc > 1 ? argv[1] : "";
   try {
     if (mode == "rig" && argc == 3) return benchRig(argv[2]);
+    if (mode == "capi" && argc == 4) return benchCapi(argv[2], argv[3]);
     if (mode == "jiggle" && argc == 6) return benchJiggle(argv[2], argv[3], argv[4], argv[5]);
   } catch (const std::exception& e) {
     std::cerr << e.what() << "\n";
     return 3;
   }
   std::cerr << "usage: runtime_bench rig BAKED.glb\n"
+               "       runtime_bench capi BAKED.glb OUT_DIR\n"
                "       runtime_bench jiggle INPUT PRESETS_DIR MUSCLE_PRESET JIGGLE_PRESET\n";
   return 1;
 }

@@ -1,6 +1,7 @@
 // Prints bench/run's runtime tables as markdown from the JSON that runtime_bench and `rigbake bake
 // --stats` wrote. Usage (one table per call):
 //   node runtime_tables.js rig NAME:RIG.json...             runtime_bench rig lines, one file each
+//   node runtime_tables.js wasm NAME:NATIVE.json:WASM.json...  runtime_bench capi and runtime_wasm_check.mjs lines
 //   node runtime_tables.js jiggle JIGGLE.json               a runtime_bench jiggle line
 //   node runtime_tables.js bytes NAME:MODE:STATS:GLB...     a bake's stats and its output file
 //   node runtime_tables.js volume NAME:PRESET:STATS...      a bake's stats
@@ -49,6 +50,31 @@ function rig(items) {
               "(float, skinned matrices only): " +
               (goal.length === 0 ? `no ${RIG_GOAL_MUSCLES}-muscle rig among these bakes`
                                  : goal.map((r) => `${r.name} ${fixed(r.float_skinned_ns, 0)} ns ${verdict(r.float_skinned_ns)}`).join("; ")));
+}
+
+// Issue 31: the WebAssembly build's rig evaluation within 2x of the native float one.
+const WASM_GOAL_RATIO = 2;
+
+function wasm(items) {
+  const results = items.map((item) => {
+    const [name, native, web] = item.split(":");
+    return Object.assign({name}, readJson(native), readJson(web));
+  });
+  console.log("### Runtime C API: ns per evaluation of the whole rig, native float vs WebAssembly (node, one thread)");
+  console.log();
+  table(["character", "muscles", "frames", "native float", "WebAssembly float", "WebAssembly / native"],
+        results.map((r) => [r.name, r.muscles, r.frames, fixed(r.native_float_ns, 0), fixed(r.wasm_float_ns, 0),
+                            fixed(r.wasm_float_ns / r.native_float_ns, 2)]));
+  console.log();
+  console.log("rigbake_rig_evaluate (runtime/rigbake_runtime.h, skinned matrices only) on the rig of each runtime bake, " +
+              "over every key time of every clip, node matrices precomputed: natively (runtime_bench capi, " +
+              "librigbake_runtime's code in the benchmark binary) and as WebAssembly (scripts/build-wasm.sh, -O3 -msimd128) " +
+              `in node ${process.version} (tests/runtime_wasm_check.mjs, frames in the WebAssembly heap); ` +
+              "both timed alike: half a second of warm-up, then windows of 64 consecutive frames, the fastest of 9 passes per " +
+              "window, the mean over every frame.");
+  const worst = results.reduce((w, r) => Math.max(w, r.wasm_float_ns / r.native_float_ns), 0);
+  console.log(`goal (issue 31): WebAssembly within ${WASM_GOAL_RATIO}x of native float: largest ratio ${fixed(worst, 2)} ` +
+              (worst <= WASM_GOAL_RATIO ? "met" : "NOT met"));
 }
 
 function jiggle(file) {
@@ -125,10 +151,11 @@ function volume(items) {
 
 const [mode, ...args] = process.argv.slice(2);
 if (mode === "rig") rig(args);
+else if (mode === "wasm") wasm(args);
 else if (mode === "jiggle") jiggle(args[0]);
 else if (mode === "bytes") bytes(args);
 else if (mode === "volume") volume(args);
 else {
-  console.error("usage: node runtime_tables.js rig|jiggle|bytes|volume FILES...");
+  console.error("usage: node runtime_tables.js rig|wasm|jiggle|bytes|volume FILES...");
   process.exit(1);
 }

@@ -15,6 +15,7 @@
 #                      its pty module for the terminal progress test (cli_bake_test)
 #   ninja              ninja-build (cli_build_test runs the emitted Ninja file)
 #   gltfpack           gltfpack (compressed inputs: EXT_meshopt_compression, KHR_mesh_quantization)
+#   emcc               emscripten (scripts/build-wasm.sh: the runtime as WebAssembly, tests/runtime_c_api_test.cpp)
 #   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression; optimize with
 #                      rigbake's config, gltf-transform/, and without it: tests/rig_pipelines_test.cpp)
 #
@@ -161,7 +162,18 @@ if ! have ninja; then
   missing "ninja is not on PATH (Debian package ninja-build)"
 fi
 
+# emcc compiles a trivial C file to a standalone WebAssembly module (its first run builds its system
+# library cache, under the user's home).
+if ! have emcc; then
+  missing "emcc is not on PATH (Debian package emscripten)"
+else
+  echo 'int twice(int x) { return 2 * x; }' >"$work/probe.c"
+  if ! emcc -O2 --no-entry -sSTANDALONE_WASM -sEXPORTED_FUNCTIONS=_twice -o "$work/probe.wasm" "$work/probe.c" >"$work/emcc.log" 2>&1; then
+    missing "emcc cannot build WebAssembly: $(tail -n 1 "$work/emcc.log") (Debian package emscripten)"
+  fi
+fi
+
 if [ "$problems" -gt 0 ]; then
   exit 1
 fi
-echo "check-tools: blender, chromium, node + gltf-validator + gltf-transform, gltfpack, glslang, python3, ninja all run" >&2
+echo "check-tools: blender, chromium, node + gltf-validator + gltf-transform, gltfpack, glslang, python3, ninja, emcc all run" >&2

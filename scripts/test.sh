@@ -10,6 +10,9 @@ bash "$repo/scripts/check-tools.sh"
 
 echo "== release build, all tests" >&2
 bash "$repo/scripts/build.sh" release >/dev/null
+# The runtime as WebAssembly, for the node test that compares it with the native library (seconds
+# when its sources are unchanged).
+bash "$repo/scripts/build-wasm.sh" >/dev/null
 # The test binary's own bakes get the allocator setting the CLI gives itself (cli/huge_pages.cpp), and
 # the CLI runs it starts need not restart for it.
 GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1:glibc.malloc.arena_max=1:glibc.malloc.mmap_threshold=8388608" \
