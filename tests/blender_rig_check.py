@@ -45,6 +45,7 @@ def sample(armature):
         for track in armature.animation_data.nla_tracks:
             track.mute = True
     tracks = list(armature.get("rigbake_clips", []))
+    helpers = json.loads(armature.get("rigbake_helpers", "{}"))
     out = {}
     for track in armature.animation_data.nla_tracks if armature.animation_data else []:
         if track.name not in tracks or not track.strips:
@@ -54,15 +55,24 @@ def sample(armature):
         # A clip that does not key a joint leaves it where the previous clip put it: start at rest.
         for pose_bone in armature.pose.bones:
             pose_bone.matrix_basis = Matrix.Identity(4)
-        clip = {"times": [], "skinned": [], "ratio": [], "twist": []}
+        clip = {"times": [], "skinned": [], "ratio": [], "twist": [], "helpers": []}
         for frame in key_frames(action):
             scene.frame_set(int(frame), subframe=frame - int(frame))
+            # The add-on's frame handler turns the jiggled bones after the frame's evaluation.
+            bpy.context.view_layer.update()
             clip["times"].append(frame * scene.render.fps_base / scene.render.fps)
             matrices = []
             for pose_bone in bones:
                 world = Z_UP_TO_Y_UP @ armature.matrix_world @ pose_bone.matrix
                 matrices.extend(world[r][c] for c in range(4) for r in range(4))
             clip["skinned"].append(matrices)
+            # Helper joints (base, tip, driver) are empties: their world matrices, glTF frame.
+            frames = []
+            for muscle in rig["muscles"]:
+                for name in helpers.get(muscle["name"], []):
+                    world = Z_UP_TO_Y_UP @ bpy.data.objects[name].matrix_world
+                    frames.extend(world[r][c] for c in range(4) for r in range(4))
+            clip["helpers"].append(frames)
             clip["ratio"].append([b["rigbake_ratio"] for b in bones])
             clip["twist"].append([b["rigbake_twist"] for b in bones])
         out[str(tracks.index(track.name))] = clip
@@ -77,6 +87,7 @@ def write(path, value):
 def live(job):
     from rigbake_blender import muscle_file, rig_build
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    os.environ["RIGBAKE_RUNTIME_LIBRARY"] = job["runtime_library"]
     addon_utils.enable("rigbake_blender", default_set=True)
     bpy.context.scene.rigbake_import_muscles = job["muscles"]
     bpy.ops.import_scene.gltf(filepath=job["baked"])
@@ -98,6 +109,32 @@ def live(job):
     muscle_file.export(armature, os.path.join(job["dir"], "moved.json"))
 
 
+def operators(job):
+    """The panel's operators on an unbaked character: place, bake and reload, validate, mirror and
+    export; then a bake with a muscle file made for another character, which must fail with rigbake's
+    one-line error as the operator's report."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon_utils.enable("rigbake_blender", default_set=True)
+    bpy.context.preferences.addons["rigbake_blender"].preferences.rigbake_path = job["rigbake"]
+    scene = bpy.context.scene
+    scene.rigbake_character = job["character"]
+    scene.rigbake_muscles = os.path.join(job["dir"], "placed.json")
+    scene.rigbake_baked = os.path.join(job["dir"], "baked.glb")
+    results = {"place": sorted(bpy.ops.rigbake.place()), "bake": sorted(bpy.ops.rigbake.bake())}
+    armature = rig_armature()
+    bpy.context.view_layer.objects.active = armature
+    results["validate"] = sorted(bpy.ops.rigbake.validate())
+    results["mirror"] = sorted(bpy.ops.rigbake.mirror())
+    results["export"] = sorted(bpy.ops.rigbake.export_muscles(filepath=os.path.join(job["dir"], "exported.json")))
+    results["armatures"] = sum(1 for o in bpy.data.objects if o.type == 'ARMATURE')
+    scene.rigbake_muscles = job["foreign_muscles"]
+    try:
+        results["foreign_bake"] = sorted(bpy.ops.rigbake.bake())
+    except RuntimeError as error:  # an operator's error report, raised by bpy.ops
+        results["foreign_bake_error"] = str(error)
+    write(os.path.join(job["dir"], "operators.json"), results)
+
+
 def reopen(job):
     bpy.ops.wm.open_mainfile(filepath=os.path.join(job["dir"], "rig.blend"))
     enabled = [a.module for a in bpy.context.preferences.addons if a.module.startswith("rigbake")]
@@ -113,6 +150,8 @@ def main():
     for job in jobs["jobs"]:
         (live if mode == "live" else reopen)(job)
         print("RIGBAKE_JOB_DONE " + job["dir"])
+    if mode == "live" and "operators" in jobs:
+        operators(jobs["operators"])
 
 
 main()

@@ -34,6 +34,12 @@ from . import gltf_frames
 EXTENSION = "RIGBAKE_muscle_rig"
 COLLECTION = "rigbake muscle rig"
 ROLES = ("origin", "insertion", "driver")
+# Blender evaluates an F-curve at x within 1e-4 of a key as the segment starting at that key (its
+# binary search's "exact" threshold in BKE_fcurve_bezt_binarysearch_index_ex), so just
+# below a key it reads the next segment: on a ratio curve of slope 12 that is 1.2e-3 of scale. The
+# curves' x axis is stretched by this factor (keys at `at` x 1000, the driver value x 1000), which
+# leaves 1e-7 of ratio or radian inside the threshold; float keys at 1000 still resolve 6e-8.
+CURVE_X_FACTOR = 1000
 # The response channels of equation 6: (curve, column of a key, name).
 CHANNELS = (("ratioKeys", 1, "ratio_up"), ("ratioKeys", 2, "ratio_side"), ("ratioKeys", 3, "ratio_scale"),
             ("twistKeys", 1, "twist_up"), ("twistKeys", 2, "twist_side"), ("twistKeys", 3, "twist_scale"))
@@ -109,8 +115,9 @@ def _bone_path(bone, prop):
     return 'pose.bones["%s"]["%s"]' % (bone, prop)
 
 
-def _driver_input(driver, curve, armature, bone, origin_empty, insertion_empty, twist_reader):
-    """The driver's value: the clamped length ratio r_c (equations 1-2) or the twist θ (equation 4)."""
+def _driver_input(driver, curve, armature, bone, origin_empty, insertion_empty, twist_reader, factor=1):
+    """The driver's value: the clamped length ratio r_c (equations 1-2) or the twist θ (equation 4),
+    times `factor`."""
     driver.type = 'SCRIPTED'
     if curve == "ratioKeys":
         distance = driver.variables.new()
@@ -121,7 +128,7 @@ def _driver_input(driver, curve, armature, bone, origin_empty, insertion_empty, 
         _prop_var(driver, "rest", armature, _bone_path(bone, "rigbake_rest_length"))
         _prop_var(driver, "lo", armature, _bone_path(bone, "rigbake_compression"))
         _prop_var(driver, "hi", armature, _bone_path(bone, "rigbake_stretch"))
-        driver.expression = "min(max(d / rest, lo), hi)"
+        driver.expression = "min(max(d / rest, lo), hi)" + (" * %d" % factor if factor != 1 else "")
     else:
         twist = driver.variables.new()
         twist.name = "theta"
@@ -130,7 +137,7 @@ def _driver_input(driver, curve, armature, bone, origin_empty, insertion_empty, 
         twist.targets[0].transform_type = 'ROT_X'
         twist.targets[0].rotation_mode = 'SWING_TWIST_X'
         twist.targets[0].transform_space = 'LOCAL_SPACE'
-        driver.expression = "theta"
+        driver.expression = "theta" + (" * %d" % factor if factor != 1 else "")
 
 
 def _drive_skinned(armature, muscle, bone, origin_empty, insertion_empty, twist_reader):
@@ -156,9 +163,9 @@ def _drive_skinned(armature, muscle, bone, origin_empty, insertion_empty, twist_
         if not keys:
             continue
         _driver_input(pose_bone.driver_add('["%s"]' % prop).driver, curve, armature, bone, origin_empty, insertion_empty,
-                      twist_reader)
+                      twist_reader, CURVE_X_FACTOR)
         fcurve = armature.animation_data.drivers.find(_bone_path(bone, prop))
-        _set_curve(fcurve, [(key[0], key[column]) for key in keys])
+        _set_curve(fcurve, [(key[0] * CURVE_X_FACTOR, key[column]) for key in keys])
     # Equations 6-7: location (0, up, side), scale (1, s, s) in the bind frame's axes.
     for path, index, expression, names in (("location", 1, "ru + tu", ("ratio_up", "twist_up")),
                                            ("location", 2, "rs + ts", ("ratio_side", "twist_side")),
@@ -174,6 +181,9 @@ def _drive_skinned(armature, muscle, bone, origin_empty, insertion_empty, twist_
 
 def _helpers(armature, muscle, objects, origin_bone, origin_empty, insertion_empty, rest_worlds, collection):
     base, tip, drive = (objects[node] for node in muscle["helperNodes"])
+    helpers = json.loads(armature.get("rigbake_helpers", "{}"))
+    helpers[muscle["name"]] = [base.name, tip.name, drive.name]
+    armature["rigbake_helpers"] = json.dumps(helpers)
     phi = float(muscle["driverFraction"])
     up_offset, side_offset = (float(v) for v in muscle["driverOffset"])
     for helper in (base, tip, drive):
@@ -233,12 +243,13 @@ def build_from_import(gltf, muscles_path):
             muscle_text = stream.read()
         muscle_file = json.loads(muscle_text)
     build(armature, rig, binds, rest_worlds, bone_of, lambda node: vnodes[node].blender_object,
-          gltf.import_settings["filepath"], muscle_file, muscle_text, muscles_path)
+          gltf.import_settings["filepath"], muscle_file, muscle_text, muscles_path, len(gltf.data.nodes))
     # The NLA track of each glTF animation, by index (the importer names them; unnamed ones too).
     armature["rigbake_clips"] = [animation.track_name for animation in gltf.data.animations or []]
 
 
-def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, muscle_file, muscle_text, muscles_path):
+def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, muscle_file, muscle_text, muscles_path,
+          node_count):
     scene = bpy.context.scene
     # Bind matrices of every joint by bone name, in double (JSON keeps every digit), for the export.
     bind_by_bone = {bone_of(node): list(matrix.T.flatten()) for node, matrix in binds.items() if bone_of(node)}
@@ -321,5 +332,13 @@ def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, mu
         if "helperNodes" in muscle:
             _helpers(armature, muscle, {n: object_of(n) for n in muscle["helperNodes"]}, origin_bone,
                      empties["origin"], empties["insertion"], rest_worlds, collection)
+    # Per joint, the matrix taking its bone's frame to its node's (the importer turns bones to point
+    # along Y; the skinned bones' frames are their nodes' now), for the runtime library's pose.
+    bone_to_node = {}
+    for node, bind in binds.items():
+        bone = bone_of(node)
+        if bone and bone in armature.data.bones:
+            matrix = (armature.matrix_world @ armature.data.bones[bone].matrix_local).inverted() @ gltf_frames.to_blender(bind)
+            bone_to_node[str(node)] = [bone, [matrix[r][c] for r in range(4) for c in range(4)]]
     from . import runtime_lib
-    runtime_lib.attach(armature, rig, bone_of)
+    runtime_lib.attach(armature, rig, bone_to_node, node_count)

@@ -12,9 +12,13 @@ class RigbakePreferences(bpy.types.AddonPreferences):
     bl_idname = __package__
     rigbake_path: StringProperty(name="rigbake executable", subtype='FILE_PATH',
                                  description="The rigbake CLI; empty: $RIGBAKE, then rigbake on PATH")
+    runtime_library: StringProperty(name="Runtime library", subtype='FILE_PATH',
+                                    description="librigbake_runtime.so, which plays the jiggles; empty: "
+                                    "$RIGBAKE_RUNTIME_LIBRARY, then beside the rigbake executable, then the system's")
 
     def draw(self, context):
         self.layout.prop(self, "rigbake_path")
+        self.layout.prop(self, "runtime_library")
 
 
 def _remove_rig(armature):
@@ -129,6 +133,25 @@ class RIGBAKE_OT_mirror(bpy.types.Operator):
         return {'FINISHED'}
 
 
+class RIGBAKE_OT_bake_jiggles(bpy.types.Operator):
+    """Key the jiggles, played from the first frame, into the armature's action (they then play without the add-on)"""
+    bl_idname = "rigbake.bake_jiggles"
+    bl_label = "Bake jiggles to action"
+
+    def execute(self, context):
+        armature = muscle_file.rig_armature(context)
+        if armature is None:
+            self.report({'ERROR'}, "BLENDER_NO_RIG: select the armature of an imported rigbake bake")
+            return {'CANCELLED'}
+        try:
+            keys = runtime_lib.bake_jiggles(context, armature)
+        except (runtime_lib.RuntimeMissing, RuntimeError) as error:
+            self.report({'ERROR'}, str(error))
+            return {'CANCELLED'}
+        self.report({'INFO'}, "keyed %d jiggle rotations" % keys)
+        return {'FINISHED'}
+
+
 class RIGBAKE_PT_panel(bpy.types.Panel):
     bl_label = "rigbake"
     bl_space_type = 'VIEW_3D'
@@ -151,7 +174,10 @@ class RIGBAKE_PT_panel(bpy.types.Panel):
         row = layout.row(align=True)
         row.operator("rigbake.export_muscles")
         row.operator("rigbake.mirror")
-        layout.label(text=runtime_lib.status(armature))
+        row = layout.row()
+        row.label(text=runtime_lib.status(armature))
+        if armature.get("rigbake_jiggles", 0):
+            row.operator("rigbake.bake_jiggles")
         box = layout.box()
         header = box.row()
         for title in ("muscle", "compression", "stretch", "ratio", "up / side / scale"):
@@ -170,7 +196,7 @@ class RIGBAKE_PT_panel(bpy.types.Panel):
 
 
 CLASSES = (RigbakePreferences, RIGBAKE_OT_place, RIGBAKE_OT_bake, RIGBAKE_OT_validate,
-           RIGBAKE_OT_export_muscles, RIGBAKE_OT_mirror, RIGBAKE_PT_panel)
+           RIGBAKE_OT_export_muscles, RIGBAKE_OT_mirror, RIGBAKE_OT_bake_jiggles, RIGBAKE_PT_panel)
 
 
 def register():
