@@ -312,4 +312,15 @@ TEST_CASE("blender add-on: the live rig follows the C++ runtime on every clip, w
   }
 }
 
+TEST_CASE("blender add-on: its bl_info version is rigbake's version") {
+  const std::string text = test::slurp(test::sourceDir() + "/blender/rigbake_blender/__init__.py");
+  std::string version = RIGBAKE_VERSION;
+  for (char& c : version) {
+    if (c == '.') c = ',';
+  }
+  std::string expected = "\"version\": (" + version + ")";
+  for (size_t at = expected.find(','); at != std::string::npos; at = expected.find(',', at + 2)) expected.insert(at + 1, " ");
+  CHECK(text.find(expected) != std::string::npos);
+}
+
 }  // namespace rigbake::blender_addon_test

@@ -180,7 +180,7 @@ class RIGBAKE_PT_panel(bpy.types.Panel):
             row.operator("rigbake.bake_jiggles")
         box = layout.box()
         header = box.row()
-        for title in ("muscle", "compression", "stretch", "ratio", "up / side / scale"):
+        for title in ("muscle", "compression", "stretch", "ratio / twist", "up / side / scale"):
             header.label(text=title)
         for pose_bone in armature.pose.bones:
             if "rigbake_muscle" not in pose_bone:
@@ -189,9 +189,7 @@ class RIGBAKE_PT_panel(bpy.types.Panel):
             row.label(text=pose_bone["rigbake_muscle"])
             row.prop(pose_bone, '["rigbake_compression"]', text="")
             row.prop(pose_bone, '["rigbake_stretch"]', text="")
-            ratio = pose_bone.get("rigbake_ratio_up")
-            row.label(text="%.3f / %.3f" % (pose_bone["rigbake_ratio_up"], pose_bone["rigbake_twist_up"])
-                      if ratio is not None else "")
+            row.label(text="%.3f / %+.2f rad" % (pose_bone.get("rigbake_ratio", 1.0), pose_bone.get("rigbake_twist", 0.0)))
             row.label(text="%.4f / %.4f / %.3f" % (pose_bone.location[1], pose_bone.location[2], pose_bone.scale[1]))
 
 
