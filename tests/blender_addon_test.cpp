@@ -218,7 +218,7 @@ struct TestCharacter {
   std::string bake_flags;
 };
 
-TEST_CASE("blender add-on: the live rig follows the C++ runtime on every clip, writes the muscle file back, and plays from a saved .blend without the add-on") {
+TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, writes the muscle file back, and plays from a saved .blend without the add-on") {
   if (!ext::requireTool(ext::onPath("blender"), "blender (Debian package blender)")) return;
   test::TempDir dir;
   // The mannequin with ROM clips added (rigbake rom), and CesiumMan (its own armature and clip).
@@ -314,7 +314,7 @@ TEST_CASE("blender add-on: the live rig follows the C++ runtime on every clip, w
   }
 }
 
-TEST_CASE("blender add-on: its bl_info version is rigbake's version") {
+TEST_CASE("Blender add-on: its bl_info version is rigbake's version") {
   const std::string text = test::slurp(test::sourceDir() + "/blender/rigbake_blender/__init__.py");
   std::string version = RIGBAKE_VERSION;
   for (char& c : version) {
