@@ -6,7 +6,8 @@
 #
 # What the tests start, and what provides it (scripts/deps-apt.txt installs the Debian packages):
 #   blender            blender (+ blender-data: the io_scene_gltf2 add-on; python3-numpy: its importer
-#                      imports numpy, and neither blender nor blender-data depends on or recommends it)
+#                      imports numpy, and neither blender nor blender-data depends on or recommends it;
+#                      rigbake's own add-on: scripts/install-blender-addon.sh)
 #   chromium           chromium (fonts come through libfontconfig1 -> fontconfig-config -> fonts-dejavu-core)
 #   node               nodejs (any vendor's) and the npm tools in .tools/ (scripts/install-validator.sh,
 #                      scripts/install-gltf-transform.sh)
@@ -64,6 +65,7 @@ else:
         try:
             importlib.import_module("io_scene_gltf2.blender.imp.gltf2_blender_gltf")
             print("RIGBAKE_OK")
+            print("RIGBAKE_ADDONS " + bpy.utils.user_resource("SCRIPTS", path="addons"))
         except ImportError as error:
             report("module " + str(error.name))
 '
@@ -77,6 +79,11 @@ else:
       missing "blender's glTF importer cannot import Python module $module (apt-file search for it, add it to scripts/deps-apt.txt)" ;;
     *) missing "blender --background does not start: $(printf '%s\n' "$output" | grep -v '^$' | tail -n 1) (Debian package blender)" ;;
   esac
+  # rigbake's add-on, installed from this repository (the tests load the repository's own copy).
+  addons="$(printf '%s\n' "$output" | sed -n 's/^RIGBAKE_ADDONS //p' | head -n 1)"
+  if [ -n "$addons" ] && ! diff -rq --exclude=__pycache__ "$repo/blender/rigbake_blender" "$addons/rigbake_blender" >/dev/null 2>&1; then
+    missing "the rigbake Blender add-on in $addons is missing or not this repository's (run scripts/install-blender-addon.sh)"
+  fi
 fi
 
 # Chromium: starts headless with the flags the tests use, a fresh profile and no network, and renders.

@@ -30,3 +30,5 @@ fi
 bash "$repo/scripts/install-validator.sh"
 bash "$repo/scripts/install-gltf-transform.sh"
 bash "$repo/scripts/install-player.sh"
+# rigbake's Blender add-on, installed and enabled in the Blender on PATH (docs/blender.md).
+bash "$repo/scripts/install-blender-addon.sh"
