@@ -351,7 +351,7 @@ TEST_CASE("retargeting lands every part within 2% of body height of the target's
   }
   if (print)
     std::cout << std::setprecision(3) << all.size() << " characters, " << pairs << " pairs: worst part " << 100.0 * worst
-              << "% of height (" << worst_at << "); edited by " << 100.0 * kEdit << "%: worst " << 100.0 * worst_edited
+              << "% of height (" << (worst > 0.0 ? worst_at : "every part exactly") << "); edited by " << 100.0 * kEdit << "%: worst " << 100.0 * worst_edited
               << "% (" << worst_edited_at << "), edit size kept to " << edit_error << " of height\n";
   INFO("worst " << worst << " of height at " << worst_at << "; edited: worst " << worst_edited << " at " << worst_edited_at);
   CHECK(worst <= 0.02);
