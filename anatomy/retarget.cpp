@@ -258,6 +258,106 @@ std::string destinationLandmark(const MusclePart& part, const std::string& which
   return frame.origin;
 }
 
+// The preset placed on a character, or nothing when the preset does not place on it (a landmark one of
+// its parts needs is missing): `rigbake place`'s own result, which a part the preset knows is carried
+// relative to.
+std::optional<MuscleSet> presetPlacement(const Character& character, const LandmarkSet& landmarks,
+                                         const MusclePreset& preset) {
+  if (preset.parts.empty()) return std::nullopt;
+  try {
+    return placeMuscles(character, landmarks, preset, Sides::kBoth);
+  } catch (const Error&) {
+    return std::nullopt;
+  }
+}
+
+const MusclePart* partNamed(const std::optional<MuscleSet>& set, const MusclePart& part) {
+  if (!set) return nullptr;
+  for (const MusclePart& candidate : set->parts) {
+    if (candidate.kind == part.kind && candidate.fullName() == part.fullName()) return &candidate;
+  }
+  return nullptr;
+}
+
+bool isLimbLandmark(const std::string& base) {
+  static const char* const kLimbs[] = {"upper_arm", "upper_arm_twist", "forearm", "forearm_twist", "hand",
+                                       "upper_leg", "lower_leg",       "foot",    "toe"};
+  return std::find(std::begin(kLimbs), std::end(kLimbs), base) != std::end(kLimbs);
+}
+
+// The axes an edit of a preset point turns with. On a limb, its segment's: an edit along the forearm
+// stays along it whether the arms rest in a T or an A pose. On the trunk and the shoulder girdle, the
+// body's own (lateral, up, forward): where a skeleton puts its spine joints is its author's choice, not
+// anatomy, and a trunk segment can point anywhere (the Quaternius Cowboy's derived T12 lies 0.05 m from
+// its L5, beside it rather than above it, so its L5 -> T12 segment runs sideways).
+Eigen::Matrix3d editAxes(const SegmentFrame& frame, const LandmarkSet& landmarks) {
+  if (isLimbLandmark(baseNameOf(frame.from))) return segmentBasis(frame, landmarks).axes;
+  Eigen::Matrix3d axes;
+  axes << landmarks.body.lateral, landmarks.body.up, landmarks.body.forward;
+  return axes;
+}
+
+// A displacement carried between two characters: turned with the axes, scaled by body height (an edit of
+// a centimetre on a 1.8 m body is half a centimetre on a 0.9 m one, whatever the bone lengths).
+Eigen::Vector3d carryEdit(const Eigen::Vector3d& edit, const SegmentFrame& frame, const LandmarkSet& from,
+                          const LandmarkSet& to) {
+  return editAxes(frame, to) * (editAxes(frame, from).transpose() * edit) * (to.body.height / from.body.height);
+}
+
+// A part the preset places on both characters: each locator is the preset's point on `dst` plus the
+// source locator's edit of the preset's point on `src` (turned with editAxes(), scaled by body height),
+// on the joint the preset's placement rides there.
+void carryEdited(const MusclePart& part, const MusclePart& src_rule, const MusclePart& dst_rule,
+                 const std::array<Anchor, 3>& anchors, const LandmarkSet& src_landmarks, const LandmarkSet& dst_landmarks,
+                 const Skeleton& dst_skeleton, MusclePart* moved) {
+  const MuscleLocator* rule_from[3] = {&src_rule.origin, &src_rule.insertion, &src_rule.driver};
+  const MuscleLocator* rule_to[3] = {&dst_rule.origin, &dst_rule.insertion, &dst_rule.driver};
+  const MuscleLocator* edited[3] = {&part.origin, &part.insertion, &part.driver};
+  MuscleLocator* targets[3] = {&moved->origin, &moved->insertion, &moved->driver};
+  for (int k = 0; k < 3; ++k) {
+    const SegmentFrame& frame = anchors[k].frame;
+    const Eigen::Vector3d edit = edited[k]->world - rule_from[k]->world;
+    const Eigen::Vector3d world = rule_to[k]->world + carryEdit(edit, frame, src_landmarks, dst_landmarks);
+    // The joint `place` attaches it to there (on a skeleton with a twist joint on one side only, the
+    // placement mirrors the left side's choice).
+    *targets[k] = locatorOn(dst_skeleton, rule_to[k]->joint, world);
+  }
+}
+
+// A part the preset does not place: origin and insertion carried whole through their landmark frames,
+// the driver between the muscle's two ends. Returns whether the driver was carried between the ends.
+bool carryThroughFrames(const MusclePart& part, const std::array<Anchor, 3>& anchors, const LandmarkSet& src_landmarks,
+                        const LandmarkSet& dst_landmarks, const Skeleton& dst_skeleton, MusclePart* moved) {
+  MuscleLocator* targets[2] = {&moved->origin, &moved->insertion};
+  const MuscleLocator* from[2] = {&part.origin, &part.insertion};
+  for (int k = 0; k < 2; ++k) {
+    const Eigen::Vector3d coords = segmentBasis(anchors[k].frame, src_landmarks).toLocal(from[k]->world);
+    const Eigen::Vector3d world = segmentBasis(anchors[k].frame, dst_landmarks).toWorld(coords);
+    *targets[k] = locatorOn(dst_skeleton, dst_landmarks.get(anchors[k].dst_landmark).joint, world);
+  }
+
+  // The driver is the resting belly of its muscle (the talk's muscleDriver), so it keeps its place
+  // between the muscle's two ends rather than on one bone: a midpoint stays the midpoint however
+  // differently the two attach segments scale.
+  const double src_height = src_landmarks.body.height;
+  const double dst_height = dst_landmarks.body.height;
+  const Eigen::Vector3d src_span = part.insertion.world - part.origin.world;
+  const Eigen::Vector3d dst_span = moved->insertion.world - moved->origin.world;
+  const bool between_ends =
+      src_span.norm() > kDegenerateFraction * src_height && dst_span.norm() > kDegenerateFraction * dst_height;
+  Eigen::Vector3d driver_world;
+  if (between_ends) {
+    const Eigen::Vector3d coords =
+        basisAlong(part.origin.world, src_span, src_height, src_landmarks.body).toLocal(part.driver.world);
+    driver_world = basisAlong(moved->origin.world, dst_span, dst_height, dst_landmarks.body).toWorld(coords);
+  } else {
+    const Eigen::Vector3d coords = segmentBasis(anchors[2].frame, src_landmarks).toLocal(part.driver.world);
+    driver_world = segmentBasis(anchors[2].frame, dst_landmarks).toWorld(coords);
+  }
+  moved->driver = locatorOn(dst_skeleton, dst_landmarks.get(anchors[2].dst_landmark).joint, driver_world);
+  return between_ends;
+}
+
 std::string fileNameOf(const std::string& path) {
   size_t slash = path.find_last_of('/');
   return slash == std::string::npos ? path : path.substr(slash + 1);
@@ -299,7 +399,13 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
     }
   }
 
-  // 2. Carry the locators.
+  // 2. Carry the locators. A part the preset places on both characters is carried as the preset's own
+  // point on `dst` plus the source's edit of it: where the preset puts it on `src` is the anatomy the
+  // edit was made against, and placing the preset on `dst` finds that anatomy on the new body from its
+  // landmarks, whatever its skeleton's hierarchy, root, facing, scale or names. Only the edit travels
+  // through a landmark frame. Other parts are carried whole through their frame.
+  const std::optional<MuscleSet> src_placed = presetPlacement(src, src_landmarks, preset);
+  const std::optional<MuscleSet> dst_placed = presetPlacement(dst, dst_landmarks, preset);
   const double src_height = src_landmarks.body.height;
   const double dst_height = dst_landmarks.body.height;
   const double body_scale = dst_height / src_height;
@@ -311,33 +417,13 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
   for (size_t i = 0; i < source.parts.size(); ++i) {
     const MusclePart& part = source.parts[i];
     MusclePart moved = part;
-    MuscleLocator* targets[2] = {&moved.origin, &moved.insertion};
-    const MuscleLocator* from[2] = {&part.origin, &part.insertion};
-    for (int k = 0; k < 2; ++k) {
-      const Anchor& anchor = anchors[i][k];
-      const Eigen::Vector3d coords = segmentBasis(anchor.frame, src_landmarks).toLocal(from[k]->world);
-      const Eigen::Vector3d world = segmentBasis(anchor.frame, dst_landmarks).toWorld(coords);
-      *targets[k] = locatorOn(dst_skeleton, dst_landmarks.get(anchor.dst_landmark).joint, world);
-    }
-
-    // The driver is the resting belly of its muscle (the talk's muscleDriver), so it keeps its place
-    // between the muscle's two ends rather than on one bone: a midpoint stays the midpoint however
-    // differently the two attach segments scale.
-    const Anchor& driver_anchor = anchors[i][2];
-    const Eigen::Vector3d src_span = part.insertion.world - part.origin.world;
-    const Eigen::Vector3d dst_span = moved.insertion.world - moved.origin.world;
-    const bool between_ends =
-        src_span.norm() > kDegenerateFraction * src_height && dst_span.norm() > kDegenerateFraction * dst_height;
-    Eigen::Vector3d driver_world;
-    if (between_ends) {
-      const Eigen::Vector3d coords =
-          basisAlong(part.origin.world, src_span, src_height, src_landmarks.body).toLocal(part.driver.world);
-      driver_world = basisAlong(moved.origin.world, dst_span, dst_height, dst_landmarks.body).toWorld(coords);
-    } else {
-      const Eigen::Vector3d coords = segmentBasis(driver_anchor.frame, src_landmarks).toLocal(part.driver.world);
-      driver_world = segmentBasis(driver_anchor.frame, dst_landmarks).toWorld(coords);
-    }
-    moved.driver = locatorOn(dst_skeleton, dst_landmarks.get(driver_anchor.dst_landmark).joint, driver_world);
+    const MusclePart* src_rule = partNamed(src_placed, part);
+    const MusclePart* dst_rule = src_rule ? partNamed(dst_placed, part) : nullptr;
+    bool between_ends = false;
+    if (dst_rule)
+      carryEdited(part, *src_rule, *dst_rule, anchors[i], src_landmarks, dst_landmarks, dst_skeleton, &moved);
+    else
+      between_ends = carryThroughFrames(part, anchors[i], src_landmarks, dst_landmarks, dst_skeleton, &moved);
 
     // Bulge and falloff radius are lengths on the body: they scale with it.
     moved.bulge = part.bulge * body_scale;
@@ -350,7 +436,6 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
       }
     }
     // A muscle's carrier is chosen again from the new character's weights; a corrective's is the joint
-    // of the same landmark there.
     // of the same landmark there. As a placement does, a corrective whose carrier the new character
     // does not resolve, or whose carrier joint a corrective of its group and side already has there
     // (two landmarks on one joint), is left out.

@@ -158,6 +158,54 @@ struct Reader {
   }
 };
 
+// The extension's jiggles (the runtime simulates them): nodes as joints of the loaded skeleton, a
+// jiggling node that is a muscle's skinned node as that muscle. Values are kept as stored; whether the
+// runtime accepts them is the validator's question (JIGGLE_WITHIN_CLAMP), not the reader's.
+void readJiggles(const tinygltf::Value& extension, const std::vector<int>& joint_of_node, const std::string& pointer,
+                 LoadedMuscleRig* loaded) {
+  const tinygltf::Value* jiggles = jsonMember(extension, "jiggles");
+  if (!jiggles) return;
+  if (!jiggles->IsArray()) {
+    loaded->problems.push_back(pointer + "/jiggles: must be an array");
+    return;
+  }
+  for (size_t i = 0; i < jiggles->ArrayLen(); ++i) {
+    const tinygltf::Value& item = jiggles->Get(static_cast<int>(i));
+    FileJiggle jiggle;
+    jiggle.pointer = pointer + "/jiggles/" + std::to_string(i);
+    Reader in{&loaded->problems, jiggle.pointer};
+    JiggleSetup& setup = jiggle.setup;
+    const tinygltf::Value* name = jsonMember(item, "name");
+    bool ok = name && name->IsString();
+    if (!ok) in.fail("/name", "must be a string");
+    ok = in.node(item, "node", joint_of_node, &setup.joint, true) && ok;
+    // -1 stands for model space in parentNode and rootNode.
+    for (auto [key, joint] : {std::pair<const char*, int*>{"parentNode", &jiggle.parent}, {"rootNode", &setup.root}}) {
+      const tinygltf::Value* value = jsonMember(item, key);
+      if (value && value->IsInt() && value->GetNumberAsInt() == -1)
+        *joint = -1;
+      else
+        ok = in.node(item, key, joint_of_node, joint, true) && ok;
+    }
+    ok = in.number(item, "stiffness", &setup.params.stiffness) && ok;
+    ok = in.number(item, "damping", &setup.params.damping) && ok;
+    ok = in.number(item, "clampMajorDeg", &setup.params.clamp_major_deg) && ok;
+    ok = in.number(item, "clampMinorDeg", &setup.params.clamp_minor_deg) && ok;
+    ok = in.numbers(item, "aimAxis", 3, setup.aim_axis.data()) && ok;
+    ok = in.numbers(item, "majorAxis", 3, setup.major_axis.data()) && ok;
+    ok = in.numbers(item, "rootUp", 3, setup.root_up.data()) && ok;
+    ok = in.number(item, "length", &setup.length) && ok;
+    if (!ok) continue;
+    setup.name = name->Get<std::string>();
+    for (size_t m = 0; m < loaded->skinned_joint.size(); ++m) {
+      if (loaded->skinned_joint[m] == setup.joint) jiggle.muscle = static_cast<int>(m);
+    }
+    setup.host = jiggle.muscle >= 0 ? JiggleHost::kMuscle : JiggleHost::kSkeletonJoint;
+    setup.muscle = jiggle.muscle;
+    loaded->jiggles.push_back(std::move(jiggle));
+  }
+}
+
 }  // namespace
 
 LoadedMuscleRig readMuscleRigExtension(const tinygltf::Model& model, const Character& character) {
@@ -220,6 +268,7 @@ LoadedMuscleRig readMuscleRigExtension(const tinygltf::Model& model, const Chara
     loaded.skinned_joint.push_back(skinned);
     loaded.rig.muscles.push_back(muscle);
   }
+  readJiggles(extension, joint_of_node, root.pointer, &loaded);
   if (loaded.problems.empty()) {
     const std::string problem = runtime::rigProblem(loaded.rig);
     if (!problem.empty()) root.fail("/muscles", problem);

@@ -445,12 +445,19 @@ CheckResult checkMuscleRatioInRange(const ValidationInputs& inputs, const std::v
   return result;
 }
 
-CheckResult checkJiggleWithinClamp(const ValidationInputs& inputs, const ValidationConfig& config) {
+CheckResult checkJiggleWithinClamp(const ValidationInputs& inputs, const std::vector<ClipJiggles>& clips,
+                                   const std::vector<FileIssue>& refused, const ValidationConfig& config) {
   CheckResult result = startCheck("JIGGLE_WITHIN_CLAMP", config);
-  if (inputs.file->jiggles.empty()) return skipped(result, "the file has no baked jiggle (bake --jiggle)");
+  if (clips.empty() && refused.empty())
+    return skipped(result, inputs.file->rig.jiggles.empty()
+                               ? "the file has no jiggle (bake --jiggle): none baked into its clips, none in " +
+                                     std::string("RIGBAKE_muscle_rig")
+                               : "the file's clips have no motion for its runtime jiggles to follow");
   Measurement measurement(&result);
+  // A jiggle the runtime refuses has nothing bounding its angle: it fails at the largest angle there is.
+  for (const FileIssue& issue : refused) measurement.add(180.0, issue.pointer, issue.message);
   int samples = 0, jiggles = 0;
-  for (const ClipJiggles& clip : inputs.file->jiggles) {
+  for (const ClipJiggles& clip : clips) {
     for (const JiggleSeries& series : clip.jiggles) {
       ++jiggles;
       double worst = std::numeric_limits<double>::lowest();
@@ -469,8 +476,11 @@ CheckResult checkJiggleWithinClamp(const ValidationInputs& inputs, const Validat
                           " s, cone half-angle there " + fixed(series.clamp_deg[worst_t], 4) + " deg");
     }
   }
-  measurement.finish(std::to_string(jiggles) + " jiggle tracks (" + std::to_string(samples) +
-                     " samples), largest excess over the cone " + fixed(result.measured, 6) + " deg");
+  const bool runtime = inputs.file->jiggles.empty();
+  measurement.finish(std::to_string(jiggles) + " jiggle tracks (" + std::to_string(samples) + " samples" +
+                     (runtime ? ", the extension's jiggles run by the runtime library" : ", baked into the clips") +
+                     (refused.empty() ? "" : "; " + std::to_string(refused.size()) + " refused by the runtime") +
+                     "), largest excess over the cone " + fixed(result.measured, 6) + " deg");
   return result;
 }
 
@@ -1023,7 +1033,10 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.deformation = packedDeformationPerClip(character, file, inputs.threads);
   report.influence_histogram = influenceHistogram(file);
   report.memory = skinMemoryTable(report.vertices);
-  report.jiggles = file.jiggles;
+  // Jiggle baked into the clips, else the extension's, run by the runtime library.
+  RuntimeJiggles runtime_jiggles;
+  if (file.jiggles.empty() && !file.rig.jiggles.empty()) runtime_jiggles = simulateFileJiggles(character, file.rig);
+  report.jiggles = file.jiggles.empty() ? runtime_jiggles.clips : file.jiggles;
   if (inputs.quality) report.quality = *inputs.quality;
 
   report.checks.push_back(checkLandmarksResolved(inputs, config));
@@ -1035,7 +1048,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkJointIndexInRange(inputs, config));
   report.checks.push_back(checkInfluenceCount(inputs, config));
   report.checks.push_back(checkPackedDeformationError(inputs, report.deformation, config));
-  report.checks.push_back(checkJiggleWithinClamp(inputs, config));
+  report.checks.push_back(checkJiggleWithinClamp(inputs, report.jiggles, runtime_jiggles.refused, config));
   report.checks.push_back(checkRegionVolumeLoss(inputs, config));
   report.checks.push_back(checkSeamOpening(inputs, config));
   report.checks.push_back(checkRoughnessRise(inputs, config));

@@ -16,6 +16,7 @@
 #include "anatomy/landmarks.h"
 #include "anatomy/muscle_set.h"
 #include "pipeline/deformation_quality.h"
+#include "pipeline/jiggle.h"
 #include "pipeline/memory_table.h"
 #include "pipeline/pack_influences.h"
 #include "pipeline/pose.h"
@@ -138,6 +139,16 @@ struct ClipJiggles {
   std::vector<JiggleSeries> jiggles;
 };
 
+// A jiggle the extension leaves to the runtime (a default bake with --jiggle), on the loaded skeleton:
+// setup.joint is the jiggling node's joint, setup.root its rootNode's (-1: model space), setup.name its
+// name; axes, length and parameters as stored (not checked: jiggleSetupProblem says what is wrong).
+struct FileJiggle {
+  JiggleSetup setup;
+  int parent = -1;  // parentNode's joint, -1: model space
+  int muscle = -1;  // the rig muscle whose skinned node jiggles, -1 for a skeleton joint
+  std::string pointer;  // "/extensions/RIGBAKE_muscle_rig/jiggles/i"
+};
+
 // The RIGBAKE_muscle_rig extension as read (formats/muscle_rig_extension.h): the rig in terms of the
 // loaded skeleton's joints, and which joint each muscle's skinned node is.
 struct FileMuscleRig {
@@ -146,6 +157,7 @@ struct FileMuscleRig {
   std::vector<std::string> names;
   std::vector<int> skinned_joint;
   std::vector<PartKind> kinds;
+  std::vector<FileJiggle> jiggles;
   std::vector<std::string> problems;
 };
 
@@ -264,7 +276,9 @@ struct Report {
   std::vector<std::int64_t> influence_histogram;  // [n] = vertices with n non-zero influences
   std::vector<ClipDeformation> deformation;
   std::vector<SkinLayoutSize> memory;
-  std::vector<ClipJiggles> jiggles;  // empty when the bake had no --jiggle
+  // Baked into the clips (read from their extras), else the extension's runtime jiggles evaluated over
+  // the file's clips (pipeline/file_jiggle.h); empty when the bake had no --jiggle.
+  std::vector<ClipJiggles> jiggles;
   BakedQuality quality;              // measured = false without muscle joints or landmarks
 
   // True when every check at error severity passed or was skipped.
@@ -284,6 +298,18 @@ struct ValidationInputs {
   ExternalValidation khronos;
   int threads = 1;  // for the per-frame measures (pipeline/parallel.h); every figure is the same at any count
 };
+
+// The extension's runtime jiggles (FileMuscleRig::jiggles, what a default bake with --jiggle writes)
+// simulated over the file's clips the way an engine runs them: the runtime's MuscleRigJob moves a
+// muscle's skinned joint, its JiggleJob steps the jiggle at 240 Hz (pipeline/jiggle.h
+// simulateJiggleFrames), at every key time of each clip. A jiggle the runtime would refuse (a cone
+// wider than 90 degrees, axes not unit or not perpendicular, a muscle of a malformed rig) is not run
+// and is listed in `refused` with the reason.
+struct RuntimeJiggles {
+  std::vector<ClipJiggles> clips;  // pointer: the extension's jiggles
+  std::vector<FileIssue> refused;
+};
+RuntimeJiggles simulateFileJiggles(const Character& character, const FileMuscleRig& rig);
 
 // Every check of checkDefinitions(), in that order, plus the plot data.
 Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationConfig& config);

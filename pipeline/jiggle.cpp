@@ -27,6 +27,7 @@
 #include "anatomy/error.h"
 #include "anatomy/landmarks.h"
 #include "anatomy/muscle_set.h"
+#include "pipeline/checks.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/pose.h"
 
@@ -560,6 +561,57 @@ void checkHits(const std::vector<HitImpulse>& hits, const std::vector<JiggleSetu
       }
     }
   }
+}
+
+RuntimeJiggles simulateFileJiggles(const Character& character, const FileMuscleRig& rig) {
+  const Skeleton& skeleton = character.skeleton;
+  RuntimeJiggles out;
+  std::vector<const FileJiggle*> runnable;
+  bool needs_rig = false;
+  for (const FileJiggle& jiggle : rig.jiggles) {
+    std::string problem = jiggleSetupProblem(jiggle.setup, skeleton);
+    if (problem.empty() && jiggle.muscle >= 0 && !rig.problems.empty()) problem = "its muscle's rig is malformed";
+    if (!problem.empty()) {
+      out.refused.push_back({jiggle.pointer, jiggle.setup.name + ": the runtime refuses it: " + problem});
+      continue;
+    }
+    needs_rig = needs_rig || jiggle.muscle >= 0;
+    runnable.push_back(&jiggle);
+  }
+  if (runnable.empty()) return out;
+  for (const Clip& clip : character.clips) {
+    if (clip.measure_only) continue;
+    ClipJiggles series;
+    series.clip = clip.name;
+    series.pointer = "/extensions/RIGBAKE_muscle_rig/jiggles";
+    series.times = sampleTimes(clip, 0.0);
+    // A clip of one key does not move: there is nothing to step.
+    if (series.times.size() < 2) continue;
+    // The un-jiggled pose at every internal step and sample time: skeleton joints as the clip animates
+    // them, a muscle's skinned joint as the runtime's muscle rig moves it.
+    const std::vector<double> frame_times = jiggleFrameTimes(series.times);
+    std::vector<std::vector<JiggleFrame>> frames(runnable.size());
+    for (double time : frame_times) {
+      const Pose pose = sampleClip(skeleton, clip, time);
+      RigEvaluation evaluation;
+      if (needs_rig) evaluation = evaluateRig(rig.rig, pose, false);
+      for (size_t j = 0; j < runnable.size(); ++j) {
+        const FileJiggle& jiggle = *runnable[j];
+        JiggleFrame frame;
+        if (jiggle.parent >= 0) frame.parent = pose.world[jiggle.parent];
+        if (jiggle.setup.root >= 0) frame.root = pose.world[jiggle.setup.root];
+        frame.pivot = jiggle.muscle >= 0 ? matrixAt(evaluation.skinned, jiggle.muscle) : pose.world[jiggle.setup.joint];
+        frames[j].push_back(frame);
+      }
+    }
+    for (size_t j = 0; j < runnable.size(); ++j) {
+      const FileJiggle& jiggle = *runnable[j];
+      const JiggleTrack track = simulateJiggleFrames(jiggle.setup, series.times, frame_times, frames[j], {}, clip.name);
+      series.jiggles.push_back({jiggle.setup.name, jiggle.muscle >= 0 ? "muscle" : "joint", track.angle_deg, track.clamp_deg});
+    }
+    out.clips.push_back(std::move(series));
+  }
+  return out;
 }
 
 }  // namespace rigbake

@@ -1,10 +1,15 @@
 // `rigbake bake --jiggle` as a technical artist runs it: the talk's jiggle settings baked into every
 // clip of the sample and of real characters, kicked by hits, exported as VRM spring bones, checked by
 // `rigbake validate`, accepted by the Khronos validator; and bad jiggle input refused cleanly.
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "cli_support.h"
+#include "formats/baked_gltf.h"
+#include "formats/gltf_document.h"
+#include "pipeline/checks.h"
 #include "external_tools.h"
 #include "glb_support.h"
 #include "test_support.h"
@@ -267,4 +272,98 @@ TEST_CASE("cli bake --jiggle: the summary says where the jiggle lives, extension
       runCli("bake " + ext::shellQuote(sample) + " --response keep --muscle-motion sampled --jiggle biceps -o " + ext::shellQuote(dir / "s.glb"));
   REQUIRE(sampled.exit_code == 0);
   CHECK(sampled.err.find("jiggle: 2 joints, 0 hits, baked into every clip\n") != std::string::npos);
+}
+
+TEST_CASE("cli validate: a runtime jiggle is run by the runtime library and checked against its cone") {
+  // A default bake keeps the jiggle in the RIGBAKE_muscle_rig extension, with no channels: validate runs
+  // it over the file's clips with the runtime's MuscleRigJob and JiggleJob instead of skipping the check.
+  test::TempDir dir;
+  const std::string baked = dir / "runtime.gltf";
+  test::CliResult bake = runCli("bake " + ext::shellQuote(test::sampleGlbPathForCli()) + " --jiggle biceps -o " +
+                                ext::shellQuote(baked));
+  INFO(bake.err);
+  REQUIRE(bake.exit_code == 0);
+  nlohmann::json gltf = nlohmann::json::parse(slurp(baked));
+  REQUIRE(gltf["extensions"]["RIGBAKE_muscle_rig"]["jiggles"].size() == 2);
+  for (const auto& animation : gltf["animations"]) CHECK_FALSE(animation.contains("extras"));
+
+  auto clampCheck = [&](const std::string& file, const std::string& report_dir, int* exit_code) {
+    test::CliResult run = runCli("validate " + ext::shellQuote(file) + " --report " + ext::shellQuote(report_dir));
+    INFO(run.err);
+    *exit_code = run.exit_code;
+    const nlohmann::json report = nlohmann::json::parse(slurp(report_dir + "/report.json"));
+    for (const auto& check : report["checks"])
+      if (check["code"] == "JIGGLE_WITHIN_CLAMP") return std::make_pair(check, report["plots"]["jiggle_angle"]);
+    FAIL("no JIGGLE_WITHIN_CLAMP in the report");
+    return std::make_pair(nlohmann::json(), nlohmann::json());
+  };
+  int exit_code = -1;
+  auto [check, plots] = clampCheck(baked, dir / "r", &exit_code);
+  CHECK(exit_code == 0);
+  CHECK(check["status"] == "pass");
+  CHECK(check["measured"].get<double>() <= 1e-6);
+  CHECK(check["message"].get<std::string>().find("run by the runtime library") != std::string::npos);
+  // Every clip of the sample, both biceps, and they do swing: the check measured real motion.
+  REQUIRE(plots.size() == 3);
+  double largest_angle = 0.0;
+  for (const auto& clip : plots) {
+    CHECK(clip["jiggles"].size() == 2);
+    for (const auto& jiggle : clip["jiggles"])
+      for (const auto& angle : jiggle["angle_deg"]) largest_angle = std::max(largest_angle, angle.get<double>());
+  }
+  CHECK(largest_angle > 0.1);
+
+  // A cone no runtime clamps to (wider than 90 degrees): the runtime refuses the jiggle, so nothing
+  // bounds it, and the check fails naming it.
+  gltf["extensions"]["RIGBAKE_muscle_rig"]["jiggles"][1]["clampMajorDeg"] = 120.0;
+  const std::string broken = dir / "broken.gltf";
+  std::ofstream(broken) << gltf.dump();
+  auto [broken_check, broken_plots] = clampCheck(broken, dir / "b", &exit_code);
+  CHECK(exit_code != 0);
+  CHECK(broken_check["status"] == "fail");
+  const std::string finding = broken_check["findings"][0]["message"];
+  CHECK(finding.find("clamp_major_deg must be in [0, 90]") != std::string::npos);
+  CHECK(broken_check["findings"][0]["location"] == "/extensions/RIGBAKE_muscle_rig/jiggles/1");
+  // The other jiggle still ran.
+  CHECK(broken_plots.size() == 3);
+}
+
+TEST_CASE("validate's runtime jiggle reproduces the bake's own simulation of the same jiggles") {
+  // A bake with --muscle-motion both records the angles it simulated in the clips' extras and keeps the
+  // jiggles in the extension: running the extension's jiggles through the runtime library over the file's
+  // clips, as validate does for a runtime bake, must give the very same angles.
+  test::TempDir dir;
+  const std::string both = dir / "both.glb";
+  REQUIRE(runCli("bake " + ext::shellQuote(test::sampleGlbPathForCli()) + " --jiggle biceps --muscle-motion both -o " +
+                 ext::shellQuote(both))
+              .exit_code == 0);
+  const LoadedCharacter loaded = loadCharacter(both);
+  const BakedFileData data = readBakedFileData(loaded);
+  REQUIRE(data.rig.jiggles.size() == 2);
+  REQUIRE(data.jiggles.size() == 3);
+  const RuntimeJiggles runtime = simulateFileJiggles(loaded.character, data.rig);
+  CHECK(runtime.refused.empty());
+  REQUIRE(runtime.clips.size() == data.jiggles.size());
+  double worst = 0.0, peak = 0.0;
+  int compared = 0;
+  for (size_t c = 0; c < runtime.clips.size(); ++c) {
+    const ClipJiggles& ran = runtime.clips[c];
+    const ClipJiggles& baked = data.jiggles[c];
+    INFO(ran.clip);
+    CHECK(ran.clip == baked.clip);
+    REQUIRE(ran.times == baked.times);
+    REQUIRE(ran.jiggles.size() == baked.jiggles.size());
+    for (size_t j = 0; j < ran.jiggles.size(); ++j) {
+      CHECK(ran.jiggles[j].joint == baked.jiggles[j].joint);
+      for (size_t t = 0; t < ran.times.size(); ++t) {
+        worst = std::max(worst, std::abs(ran.jiggles[j].angle_deg[t] - baked.jiggles[j].angle_deg[t]));
+        worst = std::max(worst, std::abs(ran.jiggles[j].clamp_deg[t] - baked.jiggles[j].clamp_deg[t]));
+        peak = std::max(peak, baked.jiggles[j].angle_deg[t]);
+        ++compared;
+      }
+    }
+  }
+  CHECK(compared == 2 * 3 * 61);
+  CHECK(peak > 2.0);  // the biceps do swing (2.49 degrees in ArmRaise)
+  CHECK(worst <= 1e-9);  // measured: 0
 }
