@@ -23,9 +23,11 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
                        (dir / "stats.json") + " --packed-out " + (dir / "baked.rbpk"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  // The summary line, where the largest error is, the response fit, the volume per clip and the
-  // roughest clip's roughness rise (the sample is one welded mesh: no seam line).
-  CHECK(lineCount(r.err) == 7);
+  // The summary line, where the largest error is, the response fit, the volume per clip, the roughest
+  // clip's roughness rise and the crease the rig folds most against plain skinning (the sample is one
+  // welded mesh: no seam line).
+  CHECK(lineCount(r.err) == 8);
+  CHECK(r.err.find("crease 'elbow_l' in 'ElbowFlexion' bent 130") != std::string::npos);
   CHECK(r.err.find("roughness rise (95th percentile of the moving skin)") != std::string::npos);
   CHECK(r.err.find("seams: ") == std::string::npos);
   CHECK(r.err.find("response fitted: 38 parts") != std::string::npos);  // 28 muscles, 10 corrective parts

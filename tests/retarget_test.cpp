@@ -459,8 +459,10 @@ TEST_CASE("hand-tuned parts the preset lacks ride on the landmark of their joint
   const std::vector<Placed>& all = characters();
   const Placed& a = all.front();
   const Placed& b = all.back();
-  // A part named nothing the preset knows, with the bicep's locators: without the preset's attach
-  // landmarks it is anchored by its joints alone, and must land where the bicep does.
+  // A part named nothing the preset knows, with the bicep's locators: without the preset's placement to
+  // carry it is anchored by its joints' landmark frames alone, and lands within the issue's 2 % of body
+  // height of where the bicep lands (the bicep itself lands exactly on the target's own placement;
+  // measured: at most 1.3 % on this pair).
   MuscleSet tuned = a.muscles;
   for (MusclePart& part : tuned.parts) part.name = "Tuned" + part.name;
   MuscleSet moved_tuned = retarget(tuned, a, b);
@@ -470,8 +472,8 @@ TEST_CASE("hand-tuned parts the preset lacks ride on the landmark of their joint
     const MusclePart& q = moved_tuned.parts[i];
     if (p.name != "Bicep" && p.name != "TricepLateral" && p.name != "TricepMedial") continue;
     INFO(p.fullName());
-    CHECK((p.origin.world - q.origin.world).norm() <= 1e-9 * b.resolved.landmarks.body.height);
-    CHECK((p.insertion.world - q.insertion.world).norm() <= 1e-9 * b.resolved.landmarks.body.height);
+    CHECK((p.origin.world - q.origin.world).norm() <= 0.02 * b.resolved.landmarks.body.height);
+    CHECK((p.insertion.world - q.insertion.world).norm() <= 0.02 * b.resolved.landmarks.body.height);
   }
 }
 
