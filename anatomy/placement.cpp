@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cctype>
+#include <iomanip>
 #include <map>
+#include <sstream>
 
 #include "anatomy/error.h"
 #include "anatomy/formula_eval.h"
@@ -91,6 +93,26 @@ MusclePart mirrorPart(const MusclePart& left, const Skeleton& skeleton, const La
   return right;
 }
 
+namespace {
+
+// The muscle file's range (docs/muscle-json.md, formats/muscle_json.cpp): no locator further than this
+// many body heights from the scene's origin. A preset within its own ranges (offsets up to 100 reference
+// heights, lerps up to 100 beyond their ends) can still add up to a point far past it, which the bake
+// would write into a muscle file that it then refuses to read (found by tests/cli_edge_numbers_test.cpp).
+constexpr double kMaxReachBodyHeights = 100.0;
+
+void requirePlacedWithinReach(const MusclePreset& preset, const PresetPart& spec, const char* which,
+                              const Eigen::Vector3d& point, double body_height) {
+  const double reach = kMaxReachBodyHeights * std::max(body_height, 1e-3);
+  if (point.norm() <= reach) return;
+  std::ostringstream text;
+  text << std::setprecision(6) << "places the " << which << " of " << spec.name << " " << point.norm()
+       << " m from the origin; a muscle lies within " << kMaxReachBodyHeights << " body heights (" << reach << " m)";
+  fail("PRESET_INVALID", preset.file + "#" + spec.pointer, text.str());
+}
+
+}  // namespace
+
 MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks, const MusclePreset& preset,
                        Sides sides) {
   const Skeleton& skeleton = character.skeleton;
@@ -115,6 +137,9 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
       Eigen::Vector3d insertion = evaluateFormula(spec.insertion, context);
       placed[spec.name + ".insertion"] = insertion;
       Eigen::Vector3d driver = spec.has_driver ? evaluateFormula(spec.driver, context) : (origin + insertion) / 2.0;
+      requirePlacedWithinReach(preset, spec, "origin", origin, landmarks.body.height);
+      requirePlacedWithinReach(preset, spec, "insertion", insertion, landmarks.body.height);
+      requirePlacedWithinReach(preset, spec, "driver", driver, landmarks.body.height);
 
       const MusclePart part = partFromPreset(skeleton, spec, "Left", landmarks.get(origin_attach).joint,
                                              landmarks.get(insertion_attach).joint, origin, insertion, driver, scale);

@@ -122,8 +122,9 @@ nlohmann::json statsJson(const BakeCommandOptions& options, const Character& cha
 int run(const BakeCommandOptions& options) {
   checkOutputOptions({{"-o", options.output, true},
                       {"--packed-out", options.packed_output, false},
-                      {"--stats", options.stats_output, false},
-                      {"--muscles-out", options.muscles_output, false}});
+                      {"--stats", options.stats_output, false, true},
+                      {"--muscles-out", options.muscles_output, false, true}},
+                     options.json);
   ProgressLine progress("rigbake bake", options.progress);
   progress.show("loading the character");
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
@@ -335,7 +336,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
   command->add_option("--stats", options->stats_output,
                       "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
-                      "body region, bytes per vertex) as JSON");
+                      "body region, bytes per vertex) as JSON; - for standard output");
   command->add_option("--response", options->response,
                       "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "
                       "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "
@@ -359,7 +360,8 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                     "sampled when the motion is sampled; in a VRM 1.0 the base and tip also carry their aim constraints "
                     "as VRMC_node_constraint");
   command->add_option("--muscles-out", options->muscles_output,
-                      "Write the muscles as baked (fitted response curves included) as muscle JSON, to edit or retarget");
+                      "Write the muscles as baked (fitted response curves included) as muscle JSON, to edit or retarget; - for "
+                      "standard output");
   command->add_option("--regions", options->regions,
                       "Body regions for the volume figures (a file, or a name under presets/regions/)")
       ->capture_default_str();

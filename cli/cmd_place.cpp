@@ -23,7 +23,7 @@ struct PlaceOptions {
 };
 
 int run(const PlaceOptions& options) {
-  checkOutputOptions({{"-o", options.output, true}});
+  checkOutputOptions({{"-o", options.output, true, true}}, options.json);
   Sides sides = options.side == "left" ? Sides::kLeft : options.side == "right" ? Sides::kRight : Sides::kBoth;
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
   ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
@@ -55,7 +55,7 @@ void addPlaceCommand(CLI::App& app, Runner* runner) {
       "side and mirror them to the right across the body's sagittal plane. Writes muscle JSON in the talk's export "
       "shape plus attach joints and factors (docs/muscle-json.md). Units: metres.");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
-  command->add_option("-o,--output", options->output, "Muscle JSON to write")->required();
+  command->add_option("-o,--output", options->output, "Muscle JSON to write; - for standard output")->required();
   command->add_option("--preset", options->preset, "Muscle preset: a file, or a name under presets/muscles/")
       ->capture_default_str();
   command->add_option("--side", options->side, "Which sides to write")

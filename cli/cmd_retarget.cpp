@@ -26,7 +26,7 @@ struct RetargetOptions {
 };
 
 int run(const RetargetOptions& options) {
-  checkOutputOptions({{"-o", options.output, true}});
+  checkOutputOptions({{"-o", options.output, true, true}}, options.json);
   PresetOptions src_presets{options.presets_dir, options.map_from};
   PresetOptions dst_presets{options.presets_dir, options.map_to};
   MusclePreset preset = loadMusclePreset(src_presets, options.preset);
@@ -84,7 +84,7 @@ void addRetargetCommand(CLI::App& app, Runner* runner) {
   command->add_option("--from", options->from, "Character the muscle file was made for (.glb, .gltf, .vrm, .fbx)")
       ->required();
   command->add_option("--to", options->to, "Character to move the muscles onto (.glb, .gltf, .vrm, .fbx)")->required();
-  command->add_option("-o,--output", options->output, "Muscle JSON to write for --to")->required();
+  command->add_option("-o,--output", options->output, "Muscle JSON to write for --to; - for standard output")->required();
   command->add_option("--preset", options->preset,
                       "Muscle preset giving each part's attach landmarks and placement rule: a file, or a name under presets/muscles/")
       ->capture_default_str();

@@ -128,11 +128,19 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   return resolved;
 }
 
-void checkOutputOptions(std::initializer_list<OutputOption> outputs) {
+void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout) {
+  const char* on_stdout = json_on_stdout ? "--json" : nullptr;
   for (const OutputOption& output : outputs) {
     if (output.path.empty()) {
       if (output.required) fail("USAGE", output.option, "names no file (an empty path)");
       continue;
+    }
+    if (output.path == kStandardOutput) {
+      if (!output.to_stdout)
+        fail("USAGE", output.option, "'-' (standard output) is only for JSON outputs; name a file (./- for one named '-')");
+      if (on_stdout != nullptr)
+        fail("USAGE", output.option, std::string("'-' and ") + on_stdout + " would both print on standard output");
+      on_stdout = output.option;
     }
     checkOutputPath(output.path);
   }

@@ -38,13 +38,16 @@ std::vector<std::string> splitClipNames(const std::string& list, const std::stri
 nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton);
 
 // An output named on the command line, checked before any work: a required one may not be empty (USAGE),
-// and none may be an existing device, FIFO, socket or directory (IO_OUTPUT_NOT_REGULAR).
+// and none may be an existing device, FIFO, socket or directory (IO_OUTPUT_NOT_REGULAR). "-" is standard
+// output where `to_stdout` allows it (JSON outputs, docs/output-contract.md) and USAGE elsewhere; at most
+// one output may be "-", and none when `json_on_stdout` (--json already prints there).
 struct OutputOption {
   const char* option;
   const std::string& path;
   bool required;
+  bool to_stdout = false;
 };
-void checkOutputOptions(std::initializer_list<OutputOption> outputs);
+void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout = false);
 
 struct ResolvedCharacter {
   LoadedCharacter loaded;

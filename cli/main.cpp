@@ -1,5 +1,8 @@
 // rigbake: rig build and bake pipeline for game characters. main only sets up the subcommands,
 // runs the chosen one and turns a rigbake::Error into one line on stderr and its exit status.
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <iostream>
 
 #include "anatomy/error.h"
@@ -38,7 +41,15 @@ int main(int argc, char** argv) {
     return static_cast<int>(rigbake::ExitCode::kUsage);
   }
   try {
-    return runner ? runner() : 0;
+    const int status = runner ? runner() : 0;
+    // What --json printed may still sit in stdio's buffer: a stdout that cannot take it (/dev/full, a
+    // closed pipe) is a failed run, not exit 0 with the figures lost.
+    errno = 0;
+    const int flushed = std::fflush(stdout), reason = errno;
+    if (flushed != 0 || std::ferror(stdout))
+      rigbake::fail("IO_WRITE_FAILED", "-", std::string("cannot write to standard output: ") +
+                                                (reason != 0 ? std::strerror(reason) : "an earlier write failed"));
+    return status;
   } catch (const rigbake::Error& e) {
     std::cerr << e.what() << "\n";
     return static_cast<int>(e.exitCode());

@@ -46,9 +46,20 @@ std::string writeTemporary(const std::string& path, const std::string& target, c
   return temp_path;
 }
 
+// Writes `bytes` to standard output, all of it or IO_WRITE_FAILED naming "-" (a closed pipe, /dev/full).
+// Through stdio, which std::cout is synchronised with, so it lands after what was printed before.
+void writeStandardOutput(const std::string& bytes) {
+  if ((!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size()) || std::fflush(stdout) != 0) {
+    std::string reason = std::strerror(errno);
+    std::clearerr(stdout);
+    fail("IO_WRITE_FAILED", kStandardOutput, "cannot write to standard output: " + reason);
+  }
+}
+
 }  // namespace
 
 std::string checkOutputPath(const std::string& path) {
+  if (path == kStandardOutput) return path;
   // Following the path as the kernel does first: /proc/self/fd/1 is a link whose text ("pipe:[7]") names
   // nothing, but what it reaches is not a regular file either.
   struct stat reached {};
@@ -91,6 +102,13 @@ void OutputBatch::commit() {
   auto removeAll = [&](const std::vector<std::string>& paths) {
     for (const std::string& p : paths) std::remove(p.c_str());
   };
+  std::vector<std::string> to_stdout;
+  std::vector<std::pair<std::string, std::string>> files;
+  for (auto& file : files_) {
+    if (file.first == kStandardOutput) to_stdout.push_back(std::move(file.second));
+    else files.push_back(std::move(file));
+  }
+  files_ = std::move(files);
   try {
     for (const auto& [path, bytes] : files_) targets.push_back(checkOutputPath(path));
     for (size_t i = 0; i < files_.size(); ++i) temps.push_back(writeTemporary(files_[i].first, targets[i], files_[i].second));
@@ -109,6 +127,14 @@ void OutputBatch::commit() {
     removeAll(std::vector<std::string>(temps.begin() + static_cast<long>(i), temps.end()));
     removeAll(renamed);
     fail("IO_WRITE_FAILED", files_[i].first, "cannot move the finished file into place: " + reason);
+  }
+  // Standard output last: it cannot be taken back, so it is written only once every file is in place,
+  // and a failed write to it removes them as any other failed output would.
+  try {
+    for (const std::string& bytes : to_stdout) writeStandardOutput(bytes);
+  } catch (...) {
+    removeAll(renamed);
+    throw;
   }
   files_.clear();
 }

@@ -14,7 +14,11 @@ namespace rigbake {
 // runs by it.
 inline constexpr const char* kTempFileMarker = ".rigbake-tmp-";
 
-// The file an output path writes: a symbolic link is followed to its target (as a shell's `>` does), so
+// The output path that means standard output (docs/output-contract.md): allowed only where a command
+// writes JSON or a report (cli/common.h checks which); written last, once every file is in place.
+inline constexpr const char* kStandardOutput = "-";
+
+// The file an output path writes ("-" stays "-": standard output): a symbolic link is followed to its target (as a shell's `>` does), so
 // the link stays and the file it names is replaced. Throws Error IO_OUTPUT_NOT_REGULAR when the path
 // exists and is not a regular file (a device, FIFO, socket or directory), so that /dev/null stays a
 // device; IO_WRITE_FAILED for a link loop. Commands call it on every output before any work.

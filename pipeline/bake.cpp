@@ -17,44 +17,6 @@
 
 namespace rigbake {
 
-const char* responseModeName(ResponseMode mode) {
-  switch (mode) {
-    case ResponseMode::kAuto: return "auto";
-    case ResponseMode::kFit: return "fit";
-    case ResponseMode::kKeep: return "keep";
-  }
-  return "auto";
-}
-
-bool parseResponseMode(const std::string& name, ResponseMode* mode) {
-  for (ResponseMode candidate : {ResponseMode::kAuto, ResponseMode::kFit, ResponseMode::kKeep}) {
-    if (name == responseModeName(candidate)) {
-      *mode = candidate;
-      return true;
-    }
-  }
-  return false;
-}
-
-const char* muscleMotionName(MuscleMotion motion) {
-  switch (motion) {
-    case MuscleMotion::kRuntime: return "runtime";
-    case MuscleMotion::kSampled: return "sampled";
-    case MuscleMotion::kBoth: return "both";
-  }
-  return "runtime";
-}
-
-bool parseMuscleMotion(const std::string& name, MuscleMotion* motion) {
-  for (MuscleMotion candidate : {MuscleMotion::kRuntime, MuscleMotion::kSampled, MuscleMotion::kBoth}) {
-    if (name == muscleMotionName(candidate)) {
-      *motion = candidate;
-      return true;
-    }
-  }
-  return false;
-}
-
 std::string muscleJointName(const MusclePart& part, MuscleJointRole role) {
   switch (role) {
     case MuscleJointRole::kBase: return part.fullName() + "_muscleBase";

@@ -17,6 +17,7 @@
 #   ninja              ninja-build (cli_build_test runs the emitted Ninja file)
 #   gltfpack           gltfpack (compressed inputs: EXT_meshopt_compression, KHR_mesh_quantization)
 #   emcc               emscripten (scripts/build-wasm.sh: the runtime as WebAssembly, tests/runtime_c_api_test.cpp)
+#   clang++            clang + libclang-rt-dev (libFuzzer and the sanitizer runtimes): scripts/fuzz.sh
 #   gltf-transform     npm @gltf-transform/cli (compressed inputs: KHR_draco_mesh_compression; optimize with
 #                      rigbake's config, gltf-transform/, and without it: tests/rig_pipelines_test.cpp)
 #
@@ -165,6 +166,18 @@ if ! /usr/bin/python3 -c 'import pty, os; pid, fd = pty.fork(); os._exit(0) if p
   missing "/usr/bin/python3 cannot open a pseudo-terminal (pty module; Debian package python3, and /dev/pts mounted)"
 fi
 
+# clang links a libFuzzer target with the sanitizers (scripts/fuzz.sh builds fuzz/ the same way).
+if ! have clang++; then
+  missing "clang++ is not on PATH (Debian package clang)"
+else
+  printf '#include <cstddef>\n#include <cstdint>\nextern "C" int LLVMFuzzerTestOneInput(const std::uint8_t*, std::size_t) { return 0; }\n' \
+    >"$work/probe_fuzz.cpp"
+  if ! clang++ -fsanitize=fuzzer,address,undefined "$work/probe_fuzz.cpp" -o "$work/probe_fuzz" >"$work/clang.log" 2>&1 ||
+     ! "$work/probe_fuzz" -runs=1 >>"$work/clang.log" 2>&1; then
+    missing "clang++ cannot build a libFuzzer target: $(grep -v '^$' "$work/clang.log" | tail -n 1) (Debian package libclang-rt-dev)"
+  fi
+fi
+
 if ! have ninja; then
   missing "ninja is not on PATH (Debian package ninja-build)"
 fi
@@ -183,4 +196,4 @@ fi
 if [ "$problems" -gt 0 ]; then
   exit 1
 fi
-echo "check-tools: blender, chromium, node + gltf-validator + gltf-transform, gltfpack, glslang, python3, ninja, emcc all run" >&2
+echo "check-tools: blender, chromium, node + gltf-validator + gltf-transform, gltfpack, glslang, python3, clang + libFuzzer, ninja, emcc all run" >&2

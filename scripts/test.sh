@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The test command: installs what is needed, builds with warnings as errors, runs every test, then
-# runs the whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer.
+# The test command: installs what is needed, builds with warnings as errors, runs every test, runs the
+# whole suite again under AddressSanitizer + UndefinedBehaviorSanitizer, then fuzzes the readers for a
+# bounded time (scripts/fuzz.sh).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$repo/scripts/install-deps.sh"
@@ -33,3 +34,9 @@ RIGBAKE_TEST_ASSETS="CesiumMan.glb,KayKit_Mannequin/manny_med_mod.gltf" \
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir "$repo/build-asan" --output-on-failure --parallel "$(nproc)" --timeout 900 \
   --exclude-regex "Blender|Khronos|Chromium|GLSL|100k vertices|byte-identical|1, 2 and 3 threads|--threads|a manifest of the three FBX characters|glTF-Transform optimize with rigbake's config"
+
+# libFuzzer targets built with clang (fuzz/, tree build-fuzz/): every seed in tests/fuzz/ (the regression
+# inputs among them), then 15 s of mutation per target, two targets at a time on two cores. Any crash,
+# sanitizer report or undocumented error fails the run.
+echo "== libFuzzer: the character loader, muscle files, presets, manifests, jiggle and hit files" >&2
+bash "$repo/scripts/fuzz.sh" "${RIGBAKE_FUZZ_SECONDS:-15}"
