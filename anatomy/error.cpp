@@ -38,7 +38,7 @@ const std::vector<ErrorCodeInfo>& errorCodes() {
       {"IO_OUTPUT_NOT_REGULAR", ExitCode::kIo, "An output path exists and is not a regular file (a device, FIFO, socket or directory), so it is not replaced."},
       {"BUILD_OUTPUT_LOCKED", ExitCode::kIo, "Another rigbake build is writing into the same output folder (it holds OUT/.rigbake-lock)."},
       {"BUILD_SOURCE_FAILED", ExitCode::kChecksFailed, "A build character's muscles_from source failed, so it could not be built (the run ends BUILD_FAILED)."},
-      {"IO_INPUT_NOT_REGULAR", ExitCode::kIo, "An input path is a device, socket or directory, not a file to read (a FIFO or pipe is read)."},
+      {"IO_INPUT_NOT_REGULAR", ExitCode::kInvalidInput, "An input path is a device, socket or directory, not a file to read (a FIFO or pipe is read)."},
       {"INPUT_TOO_LARGE", ExitCode::kInvalidInput, "An input file is larger than rigbake reads of its kind (2 GiB for a glTF, GLB or VRM, 64 MiB for JSON)."},
       {"INTERNAL", ExitCode::kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input."},
   };

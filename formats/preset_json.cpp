@@ -245,6 +245,22 @@ MusclePreset readMusclePreset(const std::string& path) {
 
 namespace {
 
+// A region's or a crease's reach: {"landmark", "radius": {"from", "to", "fraction"}}, within fraction x
+// the distance between two landmarks (a bone's length) of a landmark.
+void readNear(const JsonReader& near, std::string* landmark, std::string* from, std::string* to, double* fraction) {
+  near.allowKeys({"landmark", "radius"});
+  *landmark = near.at("landmark").asString();
+  requireLandmark(near.at("landmark"), *landmark);
+  JsonReader radius = near.at("radius");
+  radius.allowKeys({"from", "to", "fraction"});
+  *from = radius.at("from").asString();
+  *to = radius.at("to").asString();
+  requireLandmark(radius.at("from"), *from);
+  requireLandmark(radius.at("to"), *to);
+  *fraction = radius.at("fraction").asNumber();
+  if (!(*fraction > 0)) radius.at("fraction").fail("must be positive");
+}
+
 // A crease (anatomy/creases.h): {"name", "sided", "proximal": [landmarks], "distal": [landmarks],
 // "bend": [proximal landmark, distal landmark], "near": {"landmark", "radius": {"from", "to", "fraction"}}}.
 CreaseRule readCreaseRule(const JsonReader& item) {
@@ -266,17 +282,7 @@ CreaseRule readCreaseRule(const JsonReader& item) {
   rule.bend_distal = bend.at(1).asString();
   requireLandmark(bend.at(0), rule.bend_proximal);
   requireLandmark(bend.at(1), rule.bend_distal);
-  JsonReader near = item.at("near");
-  near.allowKeys({"landmark", "radius"});
-  rule.near = near.at("landmark").asString();
-  requireLandmark(near.at("landmark"), rule.near);
-  JsonReader radius = near.at("radius");
-  radius.allowKeys({"from", "to", "fraction"});
-  rule.radius_from = radius.at("from").asString();
-  rule.radius_to = radius.at("to").asString();
-  requireLandmark(radius.at("from"), rule.radius_from);
-  requireLandmark(radius.at("to"), rule.radius_to);
-  rule.radius_fraction = radius.at("fraction").asNumberIn(1e-6, 10.0, "bone lengths");
+  readNear(item.at("near"), &rule.near, &rule.radius_from, &rule.radius_to, &rule.radius_fraction);
   return rule;
 }
 
@@ -302,20 +308,7 @@ RegionPreset readRegionPreset(const std::string& path) {
     rule.owners = item.at("owners").asStringList();
     if (rule.owners.empty()) item.at("owners").fail("must name at least one landmark");
     for (const std::string& owner : rule.owners) requireLandmark(item.at("owners"), owner);
-    if (item.has("near")) {
-      JsonReader near = item.at("near");
-      near.allowKeys({"landmark", "radius"});
-      rule.near = near.at("landmark").asString();
-      requireLandmark(near.at("landmark"), rule.near);
-      JsonReader radius = near.at("radius");
-      radius.allowKeys({"from", "to", "fraction"});
-      rule.radius_from = radius.at("from").asString();
-      rule.radius_to = radius.at("to").asString();
-      requireLandmark(radius.at("from"), rule.radius_from);
-      requireLandmark(radius.at("to"), rule.radius_to);
-      rule.radius_fraction = radius.at("fraction").asNumber();
-      if (!(rule.radius_fraction > 0)) radius.at("fraction").fail("must be positive");
-    }
+    if (item.has("near")) readNear(item.at("near"), &rule.near, &rule.radius_from, &rule.radius_to, &rule.radius_fraction);
     if (item.has("facing")) {
       JsonReader facing = item.at("facing");
       facing.allowKeys({"side", "of"});

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstdint>
 #include <cstring>
 #include <set>
@@ -432,10 +433,12 @@ TEST_CASE("cli: a device as an input is one line at once, an input past its limi
     const CliResult run = runCli(args);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     INFO(args << "\n" << run.err);
-    CHECK(run.exit_code == 2);
+    // Invalid input (3), as INPUT_TOO_LARGE is: nothing to read, whatever the disk does.
+    CHECK(run.exit_code == 3);
     CHECK(lineCount(run.err) == 1);
     CHECK(run.err.rfind("IO_INPUT_NOT_REGULAR /dev/zero: is a character device", 0) == 0);
-    CHECK(seconds < 3.0);
+    // Under a second (the issue's bound); the sanitizer pass's CLI starts several times slower.
+    CHECK(seconds < (std::getenv("ASAN_OPTIONS") ? 3.0 : 1.0));
   }
   // A 65 MiB muscle file (sparse: no disk is spent) is past the 64 MiB a JSON input may have.
   { std::ofstream(dir / "huge.json") << "{"; }
