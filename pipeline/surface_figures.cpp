@@ -142,14 +142,18 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
 }
 
 
-// One crease at one sample: its two sides posed by each skinning, with their normals, and their contact.
-CreaseContact measureCrease(const Character& character, const std::vector<MeasuredPart>& parts,
-                            const std::vector<SurfacePart>& surfaces, const Crease& crease, const SkinFrame& frame) {
+// The creases that peak at one sample (`creases`), measured on one skinning of the parts they touch: each
+// part is posed by each skinning once, with its normals, and every crease's two sides read from that.
+std::vector<CreaseContact> measureCreases(const Character& character, const std::vector<MeasuredPart>& parts,
+                                          const std::vector<SurfacePart>& surfaces, const std::vector<const Crease*>& creases,
+                                          const SkinFrame& frame) {
   const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
-  std::array<CreaseSide, kSurfaceSkinnings> proximal, distal;
+  std::vector<std::array<CreaseSide, kSurfaceSkinnings>> proximal(creases.size()), distal(creases.size());
   for (size_t p = 0; p < parts.size(); ++p) {
     const size_t mesh = static_cast<size_t>(parts[p].mesh_part);
-    if (crease.proximal[mesh].empty() && crease.distal[mesh].empty()) continue;
+    bool touched = false;
+    for (const Crease* crease : creases) touched = touched || !crease->proximal[mesh].empty() || !crease->distal[mesh].empty();
+    if (!touched) continue;
     const std::vector<Eigen::Vector3d>& bind = character.meshes[mesh].positions;
     const SurfacePart& part = surfaces[p];
     const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {
@@ -164,16 +168,22 @@ CreaseContact measureCrease(const Character& character, const std::vector<Measur
           side->normal.push_back(normals[static_cast<size_t>(part.surface.weld_of_vertex[static_cast<size_t>(v)])]);
         }
       };
-      add(crease.proximal[mesh], &proximal[s]);
-      add(crease.distal[mesh], &distal[s]);
+      for (size_t k = 0; k < creases.size(); ++k) {
+        add(creases[k]->proximal[mesh], &proximal[k][s]);
+        add(creases[k]->distal[mesh], &distal[k][s]);
+      }
     }
   }
-  CreaseContact contact;
-  contact.crease = crease.name;
-  contact.bend = relativeTurn(frame[static_cast<size_t>(crease.proximal_joint)], frame[static_cast<size_t>(crease.distal_joint)]);
-  // Skin closer than a quarter of the crease's reach at bind is the same skin across the fold's line.
-  for (int s = 0; s < kSurfaceSkinnings; ++s) contact.skinning[s] = creaseContact(proximal[s], distal[s], 0.25 * crease.radius);
-  return contact;
+  std::vector<CreaseContact> contacts(creases.size());
+  for (size_t k = 0; k < creases.size(); ++k) {
+    const Crease& crease = *creases[k];
+    contacts[k].crease = crease.name;
+    contacts[k].bend = relativeTurn(frame[static_cast<size_t>(crease.proximal_joint)], frame[static_cast<size_t>(crease.distal_joint)]);
+    // Skin closer than a quarter of the crease's reach at bind is the same skin across the fold's line.
+    for (int s = 0; s < kSurfaceSkinnings; ++s)
+      contacts[k].skinning[s] = creaseContact(proximal[k][s], distal[k][s], 0.25 * crease.radius);
+  }
+  return contacts;
 }
 
 }  // namespace
@@ -244,11 +254,30 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
       if (peak >= kMinCreaseBend) crease_samples.push_back({c, k, at});
     }
   }
+  // Creases that peak at the same sample (both elbows of a symmetric clip, often its last frame) share
+  // its skinning: the samples in order of their first crease, each with its creases.
+  std::vector<std::pair<size_t, size_t>> sample_of_group;  // (clip, frame)
+  std::vector<std::vector<size_t>> group_samples;          // indices into crease_samples
+  for (size_t i = 0; i < crease_samples.size(); ++i) {
+    const std::pair<size_t, size_t> at{crease_samples[i].clip, crease_samples[i].frame};
+    const auto it = std::find(sample_of_group.begin(), sample_of_group.end(), at);
+    if (it == sample_of_group.end()) {
+      sample_of_group.push_back(at);
+      group_samples.push_back({i});
+    } else {
+      group_samples[static_cast<size_t>(it - sample_of_group.begin())].push_back(i);
+    }
+  }
   std::vector<CreaseContact> contacts(crease_samples.size());
-  parallelForEach(threads, crease_samples.size(), [&](size_t i) {
-    const CreaseSample& sample = crease_samples[i];
-    contacts[i] = measureCrease(character, parts, surfaces, creases[sample.crease], (*clips[sample.clip].frames)[sample.frame]);
-    contacts[i].time = clips[sample.clip].times[sample.frame];
+  parallelForEach(threads, sample_of_group.size(), [&](size_t g) {
+    const auto [c, t] = sample_of_group[g];
+    std::vector<const Crease*> at_sample;
+    for (size_t i : group_samples[g]) at_sample.push_back(&creases[crease_samples[i].crease]);
+    std::vector<CreaseContact> measured = measureCreases(character, parts, surfaces, at_sample, (*clips[c].frames)[t]);
+    for (size_t k = 0; k < measured.size(); ++k) {
+      measured[k].time = clips[c].times[t];
+      contacts[group_samples[g][k]] = std::move(measured[k]);
+    }
   });
   for (size_t i = 0; i < crease_samples.size(); ++i) quality->clips[crease_samples[i].clip].creases.push_back(std::move(contacts[i]));
 }
