@@ -18,10 +18,7 @@ tinygltf::Value toGltfValue(const nlohmann::json& json) {
     }
     case nlohmann::json::value_t::object: {
       tinygltf::Value::Object object;
-      for (const auto& [key, item] : json.items()) {
-        if (item.is_array() && item.empty()) continue;
-        object[key] = toGltfValue(item);
-      }
+      for (const auto& [key, item] : json.items()) object[key] = toGltfValue(item);
       return tinygltf::Value(std::move(object));
     }
     default: return tinygltf::Value();

@@ -11,8 +11,8 @@ class Value;
 
 namespace rigbake {
 
-// An empty array inside an object is left out: tinygltf 2.7 serializes an empty array as `null`,
-// which schemas that allow the key to be absent (VRM 0.x boneGroups, colliderGroups) do not allow.
+// Empty objects and arrays are kept: tinygltf 2.7 would write them as `null`, which the writer
+// (formats/gltf_write.cpp) mends for every value of the model.
 tinygltf::Value toGltfValue(const nlohmann::json& json);
 nlohmann::json toJsonValue(const tinygltf::Value& value);
 
