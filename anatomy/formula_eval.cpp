@@ -2,7 +2,7 @@
 
 #include <cassert>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -12,7 +12,7 @@ Eigen::Vector3d evaluateFormula(const PointFormula& formula, const FormulaContex
   auto landmarkOf = [&](const std::string& name) -> const Landmark& {
     std::string full = sidedName(name, context.side);
     if (!landmarks.has(full))
-      fail("LANDMARK_UNRESOLVED", context.file + "#" + formula.pointer,
+      fail(errc::LANDMARK_UNRESOLVED, context.file + "#" + formula.pointer,
            "landmark '" + full + "' is not resolved on this skeleton");
     return landmarks.get(full);
   };
@@ -50,7 +50,7 @@ Eigen::Vector3d evaluateFormula(const PointFormula& formula, const FormulaContex
     case PointFormula::Kind::kLocator: {
       auto it = context.locators ? context.locators->find(formula.name) : decltype(context.locators->end()){};
       if (!context.locators || it == context.locators->end())
-        fail("PRESET_INVALID", context.file + "#" + formula.pointer,
+        fail(errc::PRESET_INVALID, context.file + "#" + formula.pointer,
              "locator '" + formula.name + "' is not placed before this formula (use Part.origin or Part.insertion of an earlier part)");
       return it->second;
     }

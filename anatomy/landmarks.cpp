@@ -8,7 +8,7 @@
 #include <cctype>
 #include <limits>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/formula_eval.h"
 #include "anatomy/skeleton_structure.h"
 
@@ -204,7 +204,7 @@ void requireLandmarks(const LandmarkSet& set, const std::vector<std::string>& na
     if (match && match->tried.count(name)) {
       for (const std::string& n : match->tried.at(name)) tried += (tried.empty() ? "" : ", ") + n;
     }
-    fail("LANDMARK_UNRESOLVED", file,
+    fail(errc::LANDMARK_UNRESOLVED, file,
          "landmark '" + name + "' matches no joint (map " + map_name + " tried: " + (tried.empty() ? "nothing" : tried) +
              "; the structural fallback found none) and cannot be derived; pass --map with a JSON naming map");
   }

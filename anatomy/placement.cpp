@@ -6,7 +6,7 @@
 #include <map>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/formula_eval.h"
 
 namespace rigbake {
@@ -63,7 +63,7 @@ std::string chooseAttach(const std::vector<std::string>& candidates, const Landm
   }
   std::string list;
   for (const std::string& candidate : candidates) list += (list.empty() ? "" : ", ") + sidedName(candidate, side);
-  fail("LANDMARK_UNRESOLVED", preset.file + "#" + part.pointer + "/" + which,
+  fail(errc::LANDMARK_UNRESOLVED, preset.file + "#" + part.pointer + "/" + which,
        "no attach landmark of " + part.name + " is resolved (tried: " + list + ")");
 }
 
@@ -108,7 +108,7 @@ void requirePlacedWithinReach(const MusclePreset& preset, const PresetPart& spec
   std::ostringstream text;
   text << std::setprecision(6) << "places the " << which << " of " << spec.name << " " << point.norm()
        << " m from the origin; a muscle lies within " << kMaxReachBodyHeights << " body heights (" << reach << " m)";
-  fail("PRESET_INVALID", preset.file + "#" + spec.pointer, text.str());
+  fail(errc::PRESET_INVALID, preset.file + "#" + spec.pointer, text.str());
 }
 
 }  // namespace
@@ -161,7 +161,15 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
         made.push_back(std::move(carried));
       }
       for (MusclePart& one : made) {
-        if (sides != Sides::kLeft) rights.push_back(mirrorPart(one, skeleton, landmarks, origin_attach, insertion_attach));
+        if (sides != Sides::kLeft) {
+          // The mirror plane need not pass near the scene's origin, so a left locator within reach can
+          // mirror out of it: the right side is checked on its own.
+          MusclePart right = mirrorPart(one, skeleton, landmarks, origin_attach, insertion_attach);
+          requirePlacedWithinReach(preset, spec, "mirrored origin", right.origin.world, landmarks.body.height);
+          requirePlacedWithinReach(preset, spec, "mirrored insertion", right.insertion.world, landmarks.body.height);
+          requirePlacedWithinReach(preset, spec, "mirrored driver", right.driver.world, landmarks.body.height);
+          rights.push_back(std::move(right));
+        }
         lefts.push_back(std::move(one));
       }
     } catch (const Error& error) {

@@ -19,7 +19,7 @@
 #include <optional>
 #include <tuple>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 
 namespace rigbake {
@@ -235,7 +235,7 @@ std::string sourceLandmark(const MusclePart& part, const std::string& which, con
     std::string name = landmarkOnJoint(joint, locator.world, skeleton, landmarks);
     if (!name.empty()) return name;
   }
-  fail("RETARGET_LOCATOR_UNANCHORED", where,
+  fail(errc::RETARGET_LOCATOR_UNANCHORED, where,
        "joint '" + skeleton.names[locator.joint] +
            "' carries no canonical landmark and neither does any joint above it, so the locator has no body "
            "segment to be carried in (attach it to an arm, shoulder or spine joint)");
@@ -391,7 +391,7 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
       for (const auto& [landmarks, character] : {std::pair<const LandmarkSet*, const Character*>{&src_landmarks, &src},
                                                  {&dst_landmarks, &dst}}) {
         if (!segmentUsable(anchor.frame, *landmarks))
-          fail("RETARGET_SEGMENT_DEGENERATE", character->source,
+          fail(errc::RETARGET_SEGMENT_DEGENERATE, character->source,
                "landmarks '" + anchor.frame.from + "' and '" + anchor.frame.to + "' coincide, so the segment that " +
                    part.fullName() + "'s " + kWhich[k] + " rides on has no direction; fix the skeleton or pass a "
                    "naming map that picks other joints");

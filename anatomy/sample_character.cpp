@@ -23,7 +23,7 @@
 #include <cstdio>
 #include <functional>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -643,7 +643,7 @@ int SampleCharacter::findJoint(const std::string& joint_name) const {
 
 SampleCharacter makeSampleCharacter(const SampleOptions& options) {
   if (options.target_vertices < kMinSampleVertices || options.target_vertices > kMaxSampleVertices)
-    fail("USAGE", "", "the sample's vertex count must be between " + std::to_string(kMinSampleVertices) + " and " +
+    fail(errc::USAGE, "", "the sample's vertex count must be between " + std::to_string(kMinSampleVertices) + " and " +
                           std::to_string(kMaxSampleVertices) + ", got " + std::to_string(options.target_vertices));
   const CanonicalSkeleton skeleton = buildCanonicalSkeleton();
   const int joint_count = static_cast<int>(skeleton.names.size());

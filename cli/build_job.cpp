@@ -4,7 +4,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 #include "anatomy/retarget.h"
 #include "cli/common.h"
@@ -126,7 +126,7 @@ void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobO
 void removeStamp(const CharacterOutputs& out) {
   std::error_code error;
   std::filesystem::remove(out.stamp, error);
-  if (error) fail("IO_WRITE_FAILED", out.stamp, "cannot remove the previous build stamp: " + error.message());
+  if (error) fail(errc::IO_WRITE_FAILED, out.stamp, "cannot remove the previous build stamp: " + error.message());
 }
 
 }  // namespace

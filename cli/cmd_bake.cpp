@@ -5,7 +5,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 #include "cli/commands.h"
 #include "cli/common.h"
@@ -159,10 +159,10 @@ int run(const BakeCommandOptions& options) {
     bake_options.jiggles =
         resolveJiggles(readJigglePreset(presetFile(options.presets, "jiggle", options.jiggle)), character.skeleton, &resolved.landmarks, &muscles);
   } else if (!options.hits.empty()) {
-    fail("USAGE", "--hits", "needs --jiggle: hits kick jiggle joints");
+    fail(errc::USAGE, "--hits", "needs --jiggle: hits kick jiggle joints");
   }
   if (!options.hits.empty()) bake_options.hits = readHits(options.hits);
-  if (options.springs_only && options.jiggle.empty()) fail("USAGE", "--vrm-springs-only", "needs --jiggle");
+  if (options.springs_only && options.jiggle.empty()) fail(errc::USAGE, "--vrm-springs-only", "needs --jiggle");
   BakeOptions baked_motion = bake_options;
   if (options.springs_only) baked_motion.jiggles.clear();
   baked_motion.progress = progress.report();
@@ -178,7 +178,7 @@ int run(const BakeCommandOptions& options) {
   // Everything is computed before anything is written, so a failure leaves no output behind.
   const bool vrm_springs = !bake_options.jiggles.empty() && isVrmDocument(*resolved.loaded.document);
   if (options.springs_only && !vrm_springs)
-    fail("USAGE", "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
+    fail(errc::USAGE, "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
   const BakedFile file = writeBakedFile(*resolved.loaded.document, character, bake, isBinaryGltfPath(options.output),
                                         vrm_springs ? bake_options.jiggles : std::vector<JiggleSetup>{});
   stats["animation_bytes"] = {{"input", file.input_animation_bytes}, {"output", file.animation_bytes},

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <thread>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/build_job.h"
 #include "cli/commands.h"
 #include "cli/common.h"
@@ -68,14 +68,14 @@ void writeSummary(const BuildManifest& manifest, const std::vector<JobOutcome>& 
 
 // A character whose muscles_from source failed fails too; its line has a code like every failure.
 JobOutcome sourceFailed(const BuildManifest& manifest, const BuildCharacter& character) {
-  const Error error("BUILD_SOURCE_FAILED", manifest.file + "#" + character.pointer + "/muscles_from",
+  const Error error(errc::BUILD_SOURCE_FAILED, manifest.file + "#" + character.pointer + "/muscles_from",
                     "muscles_from character '" + character.muscles_from + "' failed");
   return failedJob(character, error.what());
 }
 
 int run(const BuildCommandOptions& options) {
   const std::string presets_dir = presetsDirectory(options.presets);
-  if (options.emit_ninja_given && options.emit_ninja.empty()) fail("USAGE", "--emit-ninja", "names no file (an empty path)");
+  if (options.emit_ninja_given && options.emit_ninja.empty()) fail(errc::USAGE, "--emit-ninja", "names no file (an empty path)");
   if (options.emit_ninja_given) checkOutputPath(options.emit_ninja);
   BuildManifest manifest = readBuildManifest(options.manifest, presets_dir);
   if (options.emit_ninja_given) {
@@ -94,7 +94,7 @@ int run(const BuildCommandOptions& options) {
       shard_count = 0;
     }
     if (slash == std::string::npos || shard_count < 1 || shard_index < 0 || shard_index >= shard_count)
-      fail("USAGE", "--shard", "must be I/N with 0 <= I < N, e.g. 0/4 (got '" + options.shard + "')");
+      fail(errc::USAGE, "--shard", "must be I/N with 0 <= I < N, e.g. 0/4 (got '" + options.shard + "')");
   }
   std::vector<int> selected;
   for (int index : buildOrder(manifest)) {
@@ -104,7 +104,7 @@ int run(const BuildCommandOptions& options) {
     selected.push_back(index);
   }
   if (!options.character.empty() && selected.empty())
-    fail("USAGE", "--character", "no character named '" + options.character + "' in " + options.manifest);
+    fail(errc::USAGE, "--character", "no character named '" + options.character + "' in " + options.manifest);
 
   // One build at a time per output folder: two with different options interleaved their outputs. The
   // edges of an --emit-ninja graph (--character) write disjoint folders, so they share the lock; a whole
@@ -113,7 +113,7 @@ int run(const BuildCommandOptions& options) {
   const bool exclusive = options.character.empty();
   FolderLock lock;
   if (!lock.tryLock(manifest.out, exclusive))
-    fail("BUILD_OUTPUT_LOCKED", manifest.out, "another rigbake build is writing into this folder (it holds " +
+    fail(errc::BUILD_OUTPUT_LOCKED, manifest.out, "another rigbake build is writing into this folder (it holds " +
                                                   manifest.out + "/.rigbake-lock); wait for it to finish");
   // Temporary files of runs killed before their renames; only now, with no other build writing here.
   if (exclusive) {
@@ -224,7 +224,7 @@ int run(const BuildCommandOptions& options) {
     std::cout << jsonText(result) << "\n";
   }
   if (failures > 0)
-    fail("BUILD_FAILED", options.manifest, std::to_string(failures) + " of " + std::to_string(ordered.size()) + " characters failed (listed above and in summary.json)");
+    fail(errc::BUILD_FAILED, options.manifest, std::to_string(failures) + " of " + std::to_string(ordered.size()) + " characters failed (listed above and in summary.json)");
   return 0;
 }
 
@@ -237,7 +237,7 @@ void addBuildCommand(CLI::App& app, Runner* runner) {
       "Build many characters from a manifest (docs/build.md): place or retarget muscles, bake, validate, and write "
       "OUT/NAME/{NAME.glb, muscles.json, report.json, report.junit.xml, report.html} plus OUT/summary.json and "
       "summary.junit.xml. Runs in parallel, skips characters whose inputs did not change (content hashes), goes on past "
-      "failures and names them all at the end (exit 1).");
+      "failures and names them all at the end (exit 4).");
   command->add_option("manifest", options->manifest, "Build manifest (JSON)")->required();
   command->add_option("-j,--jobs", options->jobs, "Characters built at once (default: one per core)")->check(CLI::NonNegativeNumber);
   CLI::Option* emit_ninja =

@@ -1,7 +1,7 @@
 // `rigbake errors`: the table of stable error codes and exit statuses (also in docs/errors.md).
 #include <iostream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/commands.h"
 
 namespace rigbake::cli {
@@ -10,8 +10,8 @@ void addErrorsCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand("errors", "List every error code rigbake can report, with its exit status");
   command->callback([runner]() {
     *runner = []() {
-      for (const ErrorCodeInfo& info : errorCodes())
-        std::cout << info.code << "\t" << static_cast<int>(info.exit) << "\t" << info.meaning << "\n";
+      for (const ErrorCode& info : kErrorCodes)
+        std::cout << info.name << "\t" << static_cast<int>(info.exit) << "\t" << info.meaning << "\n";
       return 0;
     };
   });

@@ -2,7 +2,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 #include "cli/commands.h"
 #include "cli/common.h"

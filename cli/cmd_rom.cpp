@@ -5,7 +5,7 @@
 #include <set>
 #include <tiny_gltf.h>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/gltf_clips.h"

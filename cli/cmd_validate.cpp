@@ -1,10 +1,10 @@
 // `rigbake validate BAKED [--muscles M] [--config C] --report DIR [--khronos] [--json]`: runs every check
 // of pipeline/checks.h on a baked character and writes DIR/report.json, DIR/report.junit.xml and
-// DIR/report.html. Exit 0 when every error-severity check passes, 1 otherwise; a
+// DIR/report.html. Exit 0 when every error-severity check passes, 4 otherwise; a
 // file rigbake cannot read at all is still exit 3, as for every command.
 #include <iostream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/progress.h"
@@ -33,7 +33,7 @@ struct ValidateCommandOptions {
 };
 
 int run(const ValidateCommandOptions& options) {
-  if (options.report_dir.empty()) fail("USAGE", "--report", "names no directory (an empty path)");
+  if (options.report_dir.empty()) fail(errc::USAGE, "--report", "names no directory (an empty path)");
   const ReportPaths paths = reportPathsIn(options.report_dir);
   checkOutputOptions({{"--report", paths.json, true}, {"--report", paths.junit, true}, {"--report", paths.html, true}});
   ProgressLine progress("rigbake validate", options.progress);

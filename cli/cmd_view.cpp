@@ -9,7 +9,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/atomic_file.h"
@@ -40,12 +40,12 @@ std::string readPlayerBundle(const std::string& path) {
   try {
     bundle = readFile(path);
   } catch (const Error&) {
-    fail("VIEW_PLAYER_MISSING", path,
+    fail(errc::VIEW_PLAYER_MISSING, path,
          "the bundled player is not there: run scripts/install-player.sh (it installs three.js and esbuild from "
          "player/package-lock.json and builds the bundle), or pass --player FILE");
   }
   if (bundle.find("RigbakePlayer") == std::string::npos)
-    fail("VIEW_PLAYER_MISSING", path, "is not the rigbake player bundle (no RigbakePlayer in it): run scripts/install-player.sh");
+    fail(errc::VIEW_PLAYER_MISSING, path, "is not the rigbake player bundle (no RigbakePlayer in it): run scripts/install-player.sh");
   return bundle;
 }
 
@@ -54,23 +54,23 @@ void checkViewable(const std::string& path, const BakedFileData& file) {
   if (!file.rig.problems.empty()) {
     std::string list;
     for (size_t k = 0; k < file.rig.problems.size() && k < 3; ++k) list += (k ? "; " : "") + file.rig.problems[k];
-    fail("VIEW_BAKE_INVALID", path, "its RIGBAKE_muscle_rig extension cannot be evaluated: " + list);
+    fail(errc::VIEW_BAKE_INVALID, path, "its RIGBAKE_muscle_rig extension cannot be evaluated: " + list);
   }
   for (const FileSkinAttributes& skin : file.skins) {
     if (skin.carries_packed && !skin.has_packed)
-      fail("VIEW_BAKE_INVALID", path + "#" + skin.pointer,
+      fail(errc::VIEW_BAKE_INVALID, path + "#" + skin.pointer,
            "its _RIGBAKE_PACKED_* attributes do not decode as docs/packed-influences.md lays them out");
   }
   // Muscle joints that nothing moves: the extension is gone and the joints have no channels (issue 31).
   if (const int undriven = undrivenMuscleJoints(file); undriven > 0) {
-    fail("VIEW_RIG_STRIPPED", path,
+    fail(errc::VIEW_RIG_STRIPPED, path,
          std::to_string(undriven) + " muscle joints without RIGBAKE_muscle_rig or channels: the rig was stripped "
          "(gltfpack and glTF-Transform without rigbake's config drop it); view the bake itself (docs/pipelines.md)");
   }
   bool baked = file.rig.present || !file.muscle_nodes.empty();
   for (const FileSkinAttributes& skin : file.skins) baked |= skin.has_packed;
   if (!baked)
-    fail("VIEW_NOT_BAKED", path,
+    fail(errc::VIEW_NOT_BAKED, path,
          "has no RIGBAKE_muscle_rig extension, no muscle joints and no packed influences: it is not a rigbake bake. "
          "Bake it first (rigbake bake " + fileNameOf(path) + " -o baked.glb), then view baked.glb");
 }

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <iostream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
@@ -35,7 +35,7 @@ std::string presetFile(const PresetOptions& options, const std::string& kind, co
   if (exists(name_or_path)) return name_or_path;
   std::string shipped = presetsDirectory(options) + "/" + kind + "/" + name_or_path + ".json";
   if (exists(shipped)) return shipped;
-  fail("IO_FILE_NOT_FOUND", name_or_path, "no such preset file, and no shipped preset of that name in " +
+  fail(errc::IO_FILE_NOT_FOUND, name_or_path, "no such preset file, and no shipped preset of that name in " +
                                               presetsDirectory(options) + "/" + kind + "/");
 }
 
@@ -53,7 +53,7 @@ std::vector<std::string> splitClipNames(const std::string& list, const std::stri
   const std::string text = list + ",";
   for (size_t start = 0, comma; (comma = text.find(',', start)) != std::string::npos; start = comma + 1) {
     const std::string name = text.substr(start, comma - start);
-    if (name.empty()) fail("USAGE", option, "has an empty clip name in '" + list + "'");
+    if (name.empty()) fail(errc::USAGE, option, "has an empty clip name in '" + list + "'");
     names.push_back(name);
   }
   return names;
@@ -116,7 +116,7 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
           found = true;
         }
       }
-      if (!found) fail("MAP_NOT_FOUND", options.map, "neither a naming map file nor the name of a shipped map in " + dir + "/skeletons");
+      if (!found) fail(errc::MAP_NOT_FOUND, options.map, "neither a naming map file nor the name of a shipped map in " + dir + "/skeletons");
     }
     inputs.forced_map = &forced;
   }
@@ -132,14 +132,14 @@ void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_o
   const char* on_stdout = json_on_stdout ? "--json" : nullptr;
   for (const OutputOption& output : outputs) {
     if (output.path.empty()) {
-      if (output.required) fail("USAGE", output.option, "names no file (an empty path)");
+      if (output.required) fail(errc::USAGE, output.option, "names no file (an empty path)");
       continue;
     }
     if (output.path == kStandardOutput) {
       if (!output.to_stdout)
-        fail("USAGE", output.option, "'-' (standard output) is only for JSON outputs; name a file (./- for one named '-')");
+        fail(errc::USAGE, output.option, "'-' (standard output) is only for JSON outputs; name a file (./- for one named '-')");
       if (on_stdout != nullptr)
-        fail("USAGE", output.option, std::string("'-' and ") + on_stdout + " would both print on standard output");
+        fail(errc::USAGE, output.option, std::string("'-' and ") + on_stdout + " would both print on standard output");
       on_stdout = output.option;
     }
     checkOutputPath(output.path);

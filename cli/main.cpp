@@ -5,7 +5,7 @@
 #include <cstring>
 #include <iostream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli/commands.h"
 #include "cli/huge_pages.h"
 
@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
     errno = 0;
     const int flushed = std::fflush(stdout), reason = errno;
     if (flushed != 0 || std::ferror(stdout))
-      rigbake::fail("IO_WRITE_FAILED", "-", std::string("cannot write to standard output: ") +
+      rigbake::fail(rigbake::errc::IO_WRITE_FAILED, "-", std::string("cannot write to standard output: ") +
                                                 (reason != 0 ? std::strerror(reason) : "an earlier write failed"));
     return status;
   } catch (const rigbake::Error& e) {

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 #include "formats/baked_gltf.h"
 #include "formats/muscle_json.h"
@@ -154,7 +154,7 @@ void writeReports(const Report& report, const ReportPaths& paths, int threads) {
     if (!parent.empty()) std::filesystem::create_directories(parent, error);
     if (error) {
       removeCreated();
-      fail("IO_WRITE_FAILED", parent.string(), "cannot create the report directory: " + error.message());
+      fail(errc::IO_WRITE_FAILED, parent.string(), "cannot create the report directory: " + error.message());
     }
   }
   // The three or none: a report.html that cannot be written must not leave a new report.json that says

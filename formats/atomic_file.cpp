@@ -1,7 +1,9 @@
 #include "formats/atomic_file.h"
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
@@ -11,7 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -22,7 +24,7 @@ namespace {
 std::string writeTemporary(const std::string& path, const std::string& target, const std::string& bytes) {
   std::string temp_path = target + kTempFileMarker + "XXXXXX";
   int fd = mkstemp(temp_path.data());
-  if (fd < 0) fail("IO_WRITE_FAILED", path, std::string("cannot create a temporary file: ") + std::strerror(errno));
+  if (fd < 0) fail(errc::IO_WRITE_FAILED, path, std::string("cannot create a temporary file: ") + std::strerror(errno));
   size_t written = 0;
   while (written < bytes.size()) {
     ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
@@ -31,7 +33,7 @@ std::string writeTemporary(const std::string& path, const std::string& target, c
       std::string reason = std::strerror(errno);
       ::close(fd);
       std::remove(temp_path.c_str());
-      fail("IO_WRITE_FAILED", path, "cannot write: " + reason);
+      fail(errc::IO_WRITE_FAILED, path, "cannot write: " + reason);
     }
     written += static_cast<size_t>(n);
   }
@@ -41,7 +43,7 @@ std::string writeTemporary(const std::string& path, const std::string& target, c
   if (::close(fd) != 0) {
     std::string reason = std::strerror(errno);
     std::remove(temp_path.c_str());
-    fail("IO_WRITE_FAILED", path, "cannot write: " + reason);
+    fail(errc::IO_WRITE_FAILED, path, "cannot write: " + reason);
   }
   return temp_path;
 }
@@ -52,8 +54,23 @@ void writeStandardOutput(const std::string& bytes) {
   if ((!bytes.empty() && std::fwrite(bytes.data(), 1, bytes.size(), stdout) != bytes.size()) || std::fflush(stdout) != 0) {
     std::string reason = std::strerror(errno);
     std::clearerr(stdout);
-    fail("IO_WRITE_FAILED", kStandardOutput, "cannot write to standard output: " + reason);
+    fail(errc::IO_WRITE_FAILED, kStandardOutput, "cannot write to standard output: " + reason);
   }
+}
+
+// RIGBAKE_KEEP_OUTPUTS=DIR (docs/output-contract.md): every glTF, GLB or VRM a run commits is also
+// copied into DIR, as PID-N-NAME, so that the test suite can run the Khronos validator over every model
+// any of its cases wrote (tests/CMakeLists.txt), however briefly the case kept it. A copy that cannot be
+// written is skipped: the run's own outputs are what counts, and the suite's check counts the copies.
+void keepCopyOfModel(const std::string& target, const std::string& bytes) {
+  const char* folder = std::getenv("RIGBAKE_KEEP_OUTPUTS");
+  if (folder == nullptr || *folder == '\0') return;
+  const std::string extension = std::filesystem::path(target).extension().string();
+  if (extension != ".glb" && extension != ".gltf" && extension != ".vrm") return;
+  static std::atomic<int> kept{0};  // `build` commits from several threads
+  const std::string name = std::to_string(::getpid()) + "-" + std::to_string(kept++) + "-" +
+                           std::filesystem::path(target).filename().string();
+  std::ofstream(std::filesystem::path(folder) / name, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
 }
 
 }  // namespace
@@ -70,7 +87,7 @@ std::string checkOutputPath(const std::string& path) {
                        : S_ISFIFO(reached.st_mode) ? "a FIFO"
                        : S_ISSOCK(reached.st_mode) ? "a socket"
                                                    : "not a regular file";
-    fail("IO_OUTPUT_NOT_REGULAR", path, std::string("exists and is ") + kind +
+    fail(errc::IO_OUTPUT_NOT_REGULAR, path, std::string("exists and is ") + kind +
                                             "; rigbake replaces only regular files (name a file to write)");
   }
   // A symbolic link: the temporary file goes beside the file it names, and the rename replaces that file,
@@ -81,12 +98,12 @@ std::string checkOutputPath(const std::string& path) {
     if (::lstat(target.c_str(), &link) != 0 || !S_ISLNK(link.st_mode)) return target;
     std::string text(static_cast<size_t>(link.st_size > 0 ? link.st_size : 4096) + 1, '\0');
     ssize_t n = ::readlink(target.c_str(), text.data(), text.size());
-    if (n < 0) fail("IO_WRITE_FAILED", path, std::string("cannot read the symbolic link: ") + std::strerror(errno));
+    if (n < 0) fail(errc::IO_WRITE_FAILED, path, std::string("cannot read the symbolic link: ") + std::strerror(errno));
     text.resize(static_cast<size_t>(n));
     const size_t slash = target.find_last_of('/');
     target = text[0] == '/' || slash == std::string::npos ? text : target.substr(0, slash + 1) + text;
   }
-  fail("IO_WRITE_FAILED", path, "too many levels of symbolic links");
+  fail(errc::IO_WRITE_FAILED, path, "too many levels of symbolic links");
 }
 
 void writeFileAtomically(const std::string& path, const std::string& bytes) {
@@ -126,7 +143,7 @@ void OutputBatch::commit() {
     std::string reason = std::strerror(errno);
     removeAll(std::vector<std::string>(temps.begin() + static_cast<long>(i), temps.end()));
     removeAll(renamed);
-    fail("IO_WRITE_FAILED", files_[i].first, "cannot move the finished file into place: " + reason);
+    fail(errc::IO_WRITE_FAILED, files_[i].first, "cannot move the finished file into place: " + reason);
   }
   // Standard output last: it cannot be taken back, so it is written only once every file is in place,
   // and a failed write to it removes them as any other failed output would.
@@ -136,15 +153,16 @@ void OutputBatch::commit() {
     removeAll(renamed);
     throw;
   }
+  for (size_t i = 0; i < files_.size(); ++i) keepCopyOfModel(targets[i], files_[i].second);
   files_.clear();
 }
 
 void createDirectories(const std::string& path) {
-  if (path.empty()) fail("IO_WRITE_FAILED", "\"\"", "an empty path names no directory");
+  if (path.empty()) fail(errc::IO_WRITE_FAILED, "\"\"", "an empty path names no directory");
   std::error_code error;
   std::filesystem::create_directories(path, error);
-  if (error) fail("IO_WRITE_FAILED", path, "cannot create the directory: " + error.message());
-  if (!std::filesystem::is_directory(path, error)) fail("IO_WRITE_FAILED", path, "exists and is not a directory");
+  if (error) fail(errc::IO_WRITE_FAILED, path, "cannot create the directory: " + error.message());
+  if (!std::filesystem::is_directory(path, error)) fail(errc::IO_WRITE_FAILED, path, "exists and is not a directory");
 }
 
 FolderLock::~FolderLock() {
@@ -154,11 +172,11 @@ FolderLock::~FolderLock() {
 bool FolderLock::tryLock(const std::string& directory, bool exclusive) {
   const std::string path = directory + "/.rigbake-lock";
   fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd_ < 0) fail("IO_WRITE_FAILED", path, std::string("cannot open the lock file: ") + std::strerror(errno));
+  if (fd_ < 0) fail(errc::IO_WRITE_FAILED, path, std::string("cannot open the lock file: ") + std::strerror(errno));
   while (::flock(fd_, (exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB) != 0) {
     if (errno == EINTR) continue;
     if (errno == EWOULDBLOCK) return false;
-    fail("IO_WRITE_FAILED", path, std::string("cannot lock: ") + std::strerror(errno));
+    fail(errc::IO_WRITE_FAILED, path, std::string("cannot lock: ") + std::strerror(errno));
   }
   return true;
 }
@@ -190,7 +208,7 @@ const char* fileKind(mode_t mode) {
 }
 
 [[noreturn]] void tooLarge(const std::string& path, std::uint64_t size, std::uint64_t max_bytes, bool at_least) {
-  fail("INPUT_TOO_LARGE", path, std::string("is ") + (at_least ? "more than " : "") + std::to_string(size) +
+  fail(errc::INPUT_TOO_LARGE, path, std::string("is ") + (at_least ? "more than " : "") + std::to_string(size) +
                                     " bytes; rigbake reads at most " + std::to_string(max_bytes) + " bytes of such a file");
 }
 
@@ -198,13 +216,13 @@ const char* fileKind(mode_t mode) {
 
 std::string readFile(const std::string& path, std::uint64_t max_bytes) {
   struct stat status {};
-  if (::stat(path.c_str(), &status) != 0) fail("IO_FILE_NOT_FOUND", path, "no such file or it cannot be opened");
+  if (::stat(path.c_str(), &status) != 0) fail(errc::IO_FILE_NOT_FOUND, path, "no such file or it cannot be opened");
   if (!S_ISREG(status.st_mode) && !S_ISFIFO(status.st_mode))
-    fail("IO_INPUT_NOT_REGULAR", path, std::string("is ") + fileKind(status.st_mode) + ", not a file to read");
+    fail(errc::IO_INPUT_NOT_REGULAR, path, std::string("is ") + fileKind(status.st_mode) + ", not a file to read");
   if (S_ISREG(status.st_mode) && static_cast<std::uint64_t>(status.st_size) > max_bytes)
     tooLarge(path, static_cast<std::uint64_t>(status.st_size), max_bytes, false);
   std::ifstream in(path, std::ios::binary);
-  if (!in) fail("IO_FILE_NOT_FOUND", path, "no such file or it cannot be opened");
+  if (!in) fail(errc::IO_FILE_NOT_FOUND, path, "no such file or it cannot be opened");
   // Read at the size the file has (one allocation, one copy): through an ostringstream the bytes were
   // copied twice and the buffer grew by doubling, most of the time of loading a 10 MB GLB.
   std::string bytes;
@@ -212,7 +230,7 @@ std::string readFile(const std::string& path, std::uint64_t max_bytes) {
     bytes.resize(static_cast<size_t>(status.st_size));
     in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     bytes.resize(static_cast<size_t>(in.gcount()));
-    if (in.bad()) fail("IO_FILE_NOT_FOUND", path, "read error");
+    if (in.bad()) fail(errc::IO_FILE_NOT_FOUND, path, "read error");
     if (in.eof()) return bytes;  // the file shrank while being read
   }
   // Whatever is left (or all of it, for a pipe or a file that grew), never more than max_bytes.
@@ -224,7 +242,7 @@ std::string readFile(const std::string& path, std::uint64_t max_bytes) {
     if (bytes.size() > max_bytes) tooLarge(path, max_bytes, max_bytes, true);
     if (!in) break;
   }
-  if (in.bad()) fail("IO_FILE_NOT_FOUND", path, "read error");
+  if (in.bad()) fail(errc::IO_FILE_NOT_FOUND, path, "read error");
   return bytes;
 }
 

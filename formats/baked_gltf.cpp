@@ -12,7 +12,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_accessor.h"
 #include "formats/gltf_json_value.h"
 #include "formats/muscle_rig_extension.h"

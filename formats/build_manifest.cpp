@@ -6,7 +6,7 @@
 #include <set>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 #include "formats/json_reader.h"
 
@@ -64,7 +64,7 @@ void checkNameText(const JsonReader& value, const std::string& name) {
 
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
   nlohmann::json json = readJsonFile(path);
-  JsonReader in(json, path, "", "MANIFEST_INVALID");
+  JsonReader in(json, path, "", errc::MANIFEST_INVALID);
   in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "out",
                 "characters"});
   BuildManifest manifest;

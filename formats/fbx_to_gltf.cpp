@@ -32,7 +32,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_buffer.h"
 
@@ -94,15 +94,15 @@ Eigen::Matrix4d fileToGltf(const aiScene& scene, const std::string& where) {
   Eigen::Matrix3d axes = Eigen::Matrix3d::Zero();
   for (int row = 0; row < 3; ++row) {
     if (axis[row] < 0 || axis[row] > 2 || (sign[row] != 1 && sign[row] != -1))
-      fail("FBX_PARSE_FAILED", where, "GlobalSettings names an invalid axis or axis sign");
+      fail(errc::FBX_PARSE_FAILED, where, "GlobalSettings names an invalid axis or axis sign");
     axes(row, axis[row]) = sign[row];
   }
   if (std::abs(std::abs(axes.determinant()) - 1.0) > 1e-9)
-    fail("FBX_PARSE_FAILED", where, "GlobalSettings names the same axis twice (up, front, right)");
+    fail(errc::FBX_PARSE_FAILED, where, "GlobalSettings names the same axis twice (up, front, right)");
   if (axes.determinant() < 0)
-    fail("FBX_PARSE_FAILED", where, "left-handed axis system (GlobalSettings CoordAxisSign): not supported");
+    fail(errc::FBX_PARSE_FAILED, where, "left-handed axis system (GlobalSettings CoordAxisSign): not supported");
   if (!(unit_cm > 0.0) || !std::isfinite(unit_cm))
-    fail("FBX_PARSE_FAILED", where, "GlobalSettings UnitScaleFactor is not a positive number");
+    fail(errc::FBX_PARSE_FAILED, where, "GlobalSettings UnitScaleFactor is not a positive number");
   Eigen::Matrix4d to_gltf = Eigen::Matrix4d::Identity();
   to_gltf.block<3, 3>(0, 0) = axes * (unit_cm / 100.0);
   return to_gltf;
@@ -167,7 +167,7 @@ SceneIndex indexScene(const aiScene& scene) {
 int boneNode(const SceneIndex& index, const aiBone& bone, int mesh_node, const std::string& where) {
   auto range = index.by_name.equal_range(bone.mName.C_Str());
   if (range.first == range.second)
-    fail("FBX_PARSE_FAILED", where, std::string("bone '") + bone.mName.C_Str() + "' has no node");
+    fail(errc::FBX_PARSE_FAILED, where, std::string("bone '") + bone.mName.C_Str() + "' has no node");
   const Eigen::Matrix4d offset = toEigen(bone.mOffsetMatrix);
   int best = -1;
   double best_mismatch = 0.0;
@@ -537,7 +537,7 @@ void addAnimations(const aiScene& scene, const SceneIndex& index, tinygltf::Mode
 FbxConversion convertFbxToGltf(const std::string& path, tinygltf::Model* model) {
   const std::string bytes = readFile(path);
   if (!looksLikeFbx(bytes))
-    fail("FBX_PARSE_FAILED", path, "not an FBX file (neither the 'Kaydara FBX Binary' magic nor an ASCII FBX header)");
+    fail(errc::FBX_PARSE_FAILED, path, "not an FBX file (neither the 'Kaydara FBX Binary' magic nor an ASCII FBX header)");
   Assimp::Importer importer;
   // Pivots as "$AssimpFbx$" helper nodes would stand between bones in the hierarchy.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_FBX_PRESERVE_PIVOTS, false);
@@ -546,8 +546,8 @@ FbxConversion convertFbxToGltf(const std::string& path, tinygltf::Model* model) 
   const aiScene* scene = importer.ReadFileFromMemory(
       bytes.data(), bytes.size(), aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure,
       "fbx");
-  if (!scene || !scene->mRootNode) fail("FBX_PARSE_FAILED", path, firstLine(importer.GetErrorString()));
-  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail("FBX_PARSE_FAILED", path, "Assimp read the scene only in part");
+  if (!scene || !scene->mRootNode) fail(errc::FBX_PARSE_FAILED, path, firstLine(importer.GetErrorString()));
+  if (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) fail(errc::FBX_PARSE_FAILED, path, "Assimp read the scene only in part");
 
   FbxConversion conversion;
   const SceneIndex index = indexScene(*scene);

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cstring>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 namespace {
@@ -59,15 +59,15 @@ const unsigned char* viewRange(const tinygltf::Model& model, int buffer_view, si
                                size_t element_size, size_t* stride, const std::string& where,
                                const std::string& what) {
   if (buffer_view < 0 || buffer_view >= static_cast<int>(model.bufferViews.size()))
-    fail("GLTF_ACCESSOR_INVALID", where, what + " refers to a missing bufferView");
+    fail(errc::GLTF_ACCESSOR_INVALID, where, what + " refers to a missing bufferView");
   const tinygltf::BufferView& view = model.bufferViews[buffer_view];
   if (view.buffer < 0 || view.buffer >= static_cast<int>(model.buffers.size()))
-    fail("GLTF_ACCESSOR_INVALID", where, what + " refers to a missing buffer");
+    fail(errc::GLTF_ACCESSOR_INVALID, where, what + " refers to a missing buffer");
   const std::vector<unsigned char>& data = model.buffers[view.buffer].data;
   *stride = view.byteStride ? view.byteStride : element_size;
   size_t span = count == 0 ? 0 : byte_offset + *stride * (count - 1) + element_size;
   if (span > view.byteLength || view.byteOffset + view.byteLength > data.size())
-    fail("GLTF_ACCESSOR_INVALID", where, what + " reads past the end of its buffer (file truncated?)");
+    fail(errc::GLTF_ACCESSOR_INVALID, where, what + " reads past the end of its buffer (file truncated?)");
   return data.data() + view.byteOffset + byte_offset;
 }
 
@@ -89,13 +89,13 @@ int accessorComponentCount(int type) {
 AccessorData readAccessor(const tinygltf::Model& model, int accessor_index, const std::string& where) {
   const std::string what = "/accessors/" + std::to_string(accessor_index);
   if (accessor_index < 0 || accessor_index >= static_cast<int>(model.accessors.size()))
-    fail("GLTF_ACCESSOR_INVALID", where, what + " does not exist");
+    fail(errc::GLTF_ACCESSOR_INVALID, where, what + " does not exist");
   const tinygltf::Accessor& accessor = model.accessors[accessor_index];
   AccessorData out;
   out.components = accessorComponentCount(accessor.type);
   int size = componentSize(accessor.componentType);
-  if (out.components == 0 || size == 0) fail("GLTF_ACCESSOR_INVALID", where, what + " has an unknown type");
-  if (accessor.count > (1 << 28)) fail("GLTF_ACCESSOR_INVALID", where, what + " has an implausible count");
+  if (out.components == 0 || size == 0) fail(errc::GLTF_ACCESSOR_INVALID, where, what + " has an unknown type");
+  if (accessor.count > (1 << 28)) fail(errc::GLTF_ACCESSOR_INVALID, where, what + " has an implausible count");
   out.count = static_cast<int>(accessor.count);
   out.values.assign(static_cast<size_t>(out.count) * out.components, 0.0);
   size_t element_size = static_cast<size_t>(size) * out.components;
@@ -117,14 +117,14 @@ AccessorData readAccessor(const tinygltf::Model& model, int accessor_index, cons
     size_t index_stride = 0, value_stride = 0;
     int index_size = componentSize(sparse.indices.componentType);
     if (index_size == 0 || n < 0 || n > out.count)
-      fail("GLTF_ACCESSOR_INVALID", where, what + "/sparse is malformed");
+      fail(errc::GLTF_ACCESSOR_INVALID, where, what + "/sparse is malformed");
     const unsigned char* indices = viewRange(model, sparse.indices.bufferView, sparse.indices.byteOffset, n,
                                              index_size, &index_stride, where, what + "/sparse/indices");
     const unsigned char* values = viewRange(model, sparse.values.bufferView, sparse.values.byteOffset, n,
                                             element_size, &value_stride, where, what + "/sparse/values");
     for (int k = 0; k < n; ++k) {
       double index = decode(indices + index_stride * k, sparse.indices.componentType, false);
-      if (index < 0 || index >= out.count) fail("GLTF_ACCESSOR_INVALID", where, what + "/sparse index out of range");
+      if (index < 0 || index >= out.count) fail(errc::GLTF_ACCESSOR_INVALID, where, what + "/sparse index out of range");
       for (int c = 0; c < out.components; ++c) {
         out.values[static_cast<size_t>(index) * out.components + c] =
             decode(values + value_stride * k + static_cast<size_t>(size) * c, accessor.componentType,

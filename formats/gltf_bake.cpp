@@ -6,7 +6,7 @@
 #include <limits>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_buffer.h"
 #include "formats/gltf_write.h"
 #include "formats/muscle_rig_extension.h"
@@ -296,7 +296,7 @@ int addHelperAimConstraints(tinygltf::Model* model, const Character& character, 
     const BakedJoint* tip = &bake.joints[tip_joint];
     const int base_node = node_of_joint[base_joint];
     const int tip_node = node_of_joint[tip_joint];
-    if (base_node < 0 || tip_node < 0) fail("GLTF_PARSE_FAILED", "/nodes", "the baked model lacks " + base->name + " or " + tip->name);
+    if (base_node < 0 || tip_node < 0) fail(errc::GLTF_PARSE_FAILED, "/nodes", "the baked model lacks " + base->name + " or " + tip->name);
     tinygltf::Node target;
     target.name = tip->name + "Target";
     target.translation = vec(base->rest_local.translation);

@@ -32,7 +32,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_accessor.h"
 #include "formats/gltf_json_value.h"
 
@@ -224,51 +224,51 @@ void decodeMeshoptView(tinygltf::Model* model, int view_index, DecodedBuffer* de
   const std::string mode = stringMember(extension, "mode", "");
   const std::string filter = stringMember(extension, "filter", "NONE");
   if (buffer < 0 || offset < 0 || length < 0 || stride <= 0 || count < 0)
-    fail("GLTF_PARSE_FAILED", where,
+    fail(errc::GLTF_PARSE_FAILED, where,
          pointer + " needs buffer, byteLength, byteStride and count as non-negative integers");
   if (buffer >= static_cast<double>(model->buffers.size()))
-    fail("GLTF_PARSE_FAILED", where, pointer + "/buffer is not a buffer");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + "/buffer is not a buffer");
   const std::vector<unsigned char>& source = model->buffers[static_cast<size_t>(buffer)].data;
   if (offset + length > static_cast<double>(source.size()))
-    fail("GLTF_PARSE_FAILED", where, pointer + " reads past the end of its buffer (file truncated?)");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + " reads past the end of its buffer (file truncated?)");
   if (count * stride > kMaxDecodedBytes)
-    fail("GLTF_PARSE_FAILED", where, pointer + " asks for an implausible decoded size");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + " asks for an implausible decoded size");
   const size_t n = static_cast<size_t>(count), size = static_cast<size_t>(stride);
   const unsigned char* bytes = source.data() + static_cast<size_t>(offset);
   std::vector<unsigned char> out(n * size);
   int status = 0;
   if (mode == "ATTRIBUTES") {
     if (size % 4 != 0 || size > 256)
-      fail("GLTF_PARSE_FAILED", where,
+      fail(errc::GLTF_PARSE_FAILED, where,
            pointer + ": ATTRIBUTES needs a byteStride that is a multiple of 4, at most 256");
     status = meshopt_decodeVertexBuffer(out.data(), n, size, bytes, static_cast<size_t>(length));
   } else if (mode == "TRIANGLES" || mode == "INDICES") {
     if (size != 2 && size != 4)
-      fail("GLTF_PARSE_FAILED", where, pointer + ": " + mode + " needs a byteStride of 2 or 4");
+      fail(errc::GLTF_PARSE_FAILED, where, pointer + ": " + mode + " needs a byteStride of 2 or 4");
     if (mode == "TRIANGLES" && n % 3 != 0)
-      fail("GLTF_PARSE_FAILED", where, pointer + ": TRIANGLES needs a count that is a multiple of 3");
+      fail(errc::GLTF_PARSE_FAILED, where, pointer + ": TRIANGLES needs a count that is a multiple of 3");
     status = mode == "TRIANGLES" ? meshopt_decodeIndexBuffer(out.data(), n, size, bytes, static_cast<size_t>(length))
                                  : meshopt_decodeIndexSequence(out.data(), n, size, bytes, static_cast<size_t>(length));
   } else {
-    fail("GLTF_PARSE_FAILED", where, pointer + "/mode '" + mode + "' is not ATTRIBUTES, TRIANGLES or INDICES");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + "/mode '" + mode + "' is not ATTRIBUTES, TRIANGLES or INDICES");
   }
   if (status != 0)
-    fail("GLTF_PARSE_FAILED", where,
+    fail(errc::GLTF_PARSE_FAILED, where,
          pointer + ": the compressed data does not decode (meshoptimizer " +
              std::to_string(MESHOPTIMIZER_VERSION / 1000) + "." + std::to_string(MESHOPTIMIZER_VERSION % 1000 / 10) +
              " error " + std::to_string(status) + "; damaged, or written in a newer codec version)");
   if (filter != "NONE" && mode != "ATTRIBUTES")
-    fail("GLTF_PARSE_FAILED", where, pointer + "/filter " + filter + " applies to ATTRIBUTES only");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + "/filter " + filter + " applies to ATTRIBUTES only");
   if (filter == "OCTAHEDRAL") {
-    if (size != 4 && size != 8) fail("GLTF_PARSE_FAILED", where, pointer + ": OCTAHEDRAL needs a byteStride of 4 or 8");
+    if (size != 4 && size != 8) fail(errc::GLTF_PARSE_FAILED, where, pointer + ": OCTAHEDRAL needs a byteStride of 4 or 8");
     meshopt_decodeFilterOct(out.data(), n, size);
   } else if (filter == "QUATERNION") {
-    if (size != 8) fail("GLTF_PARSE_FAILED", where, pointer + ": QUATERNION needs a byteStride of 8");
+    if (size != 8) fail(errc::GLTF_PARSE_FAILED, where, pointer + ": QUATERNION needs a byteStride of 8");
     meshopt_decodeFilterQuat(out.data(), n, size);
   } else if (filter == "EXPONENTIAL") {
     meshopt_decodeFilterExp(out.data(), n, size);
   } else if (filter != "NONE") {
-    fail("GLTF_PARSE_FAILED", where,
+    fail(errc::GLTF_PARSE_FAILED, where,
          pointer + "/filter '" + filter + "' is not NONE, OCTAHEDRAL, QUATERNION or EXPONENTIAL");
   }
   view.buffer = decoded->index();
@@ -379,24 +379,24 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
   const double payload_number = integerMember(extension, "bufferView", -1);
   const tinygltf::Value& ids = gltfMember(extension, "attributes");
   if (payload_number < 0 || payload_number >= static_cast<double>(model->bufferViews.size()) || !ids.IsObject())
-    fail("GLTF_PARSE_FAILED", where, pointer + " needs a bufferView and an attributes object");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + " needs a bufferView and an attributes object");
   const int payload = static_cast<int>(payload_number);
   const int mode = primitive.mode < 0 ? TINYGLTF_MODE_TRIANGLES : primitive.mode;
   if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP)
-    fail("GLTF_PARSE_FAILED", where, pointer + " is on a primitive that is not TRIANGLES or TRIANGLE_STRIP");
+    fail(errc::GLTF_PARSE_FAILED, where, pointer + " is on a primitive that is not TRIANGLES or TRIANGLE_STRIP");
 
   if (!state->meshes.count(payload)) {
     const tinygltf::BufferView& view = model->bufferViews[payload];
     if (view.buffer < 0 || view.buffer >= static_cast<int>(model->buffers.size()) ||
         view.byteOffset + view.byteLength > model->buffers[view.buffer].data.size())
-      fail("GLTF_PARSE_FAILED", where, pointer + "/bufferView lies outside its buffer (file truncated?)");
+      fail(errc::GLTF_PARSE_FAILED, where, pointer + "/bufferView lies outside its buffer (file truncated?)");
     draco::DecoderBuffer buffer;
     buffer.Init(reinterpret_cast<const char*>(model->buffers[view.buffer].data.data() + view.byteOffset),
                 view.byteLength);
     draco::Decoder decoder;
     auto result = decoder.DecodeMeshFromBuffer(&buffer);
     if (!result.ok())
-      fail("GLTF_PARSE_FAILED", where,
+      fail(errc::GLTF_PARSE_FAILED, where,
            pointer + ": Draco cannot decode bufferView " + std::to_string(payload) + " (" +
                result.status().error_msg_string() + ")");
     state->meshes[payload] = std::move(result).value();
@@ -407,16 +407,16 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
     const tinygltf::Value& id = gltfMember(ids, semantic);
     if (!id.IsNumber() && !id.IsInt()) continue;  // an attribute stored outside the Draco mesh
     if (accessor_index < 0 || accessor_index >= static_cast<int>(model->accessors.size()))
-      fail("GLTF_ACCESSOR_INVALID", where, pointer + ": attribute " + semantic + " has no accessor");
+      fail(errc::GLTF_ACCESSOR_INVALID, where, pointer + ": attribute " + semantic + " has no accessor");
     if (state->accessor_done[accessor_index]) continue;
     const draco::PointAttribute* attribute = mesh.GetAttributeByUniqueId(static_cast<uint32_t>(id.GetNumberAsInt()));
     tinygltf::Accessor& accessor = model->accessors[accessor_index];
     if (!attribute)
-      fail("GLTF_PARSE_FAILED", where, pointer + "/attributes/" + semantic + " names no attribute of the Draco mesh");
+      fail(errc::GLTF_PARSE_FAILED, where, pointer + "/attributes/" + semantic + " names no attribute of the Draco mesh");
     const int components = accessorComponentCount(accessor.type);
     if (components == 0 || components > 16 || componentBytes(accessor.componentType) == 0 ||
         attribute->num_components() != components || accessor.count != mesh.num_points())
-      fail("GLTF_ACCESSOR_INVALID", where,
+      fail(errc::GLTF_ACCESSOR_INVALID, where,
            "/accessors/" + std::to_string(accessor_index) + " (" + semantic + ") does not fit the Draco mesh's " +
                std::to_string(mesh.num_points()) + " points of " + std::to_string(attribute->num_components()) +
                " components");
@@ -425,7 +425,7 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
     bool ok = true;
     const size_t stride = convertAttribute(mesh, *attribute, accessor, &bytes, &bounds, &ok);
     if (!ok)
-      fail("GLTF_ACCESSOR_INVALID", where,
+      fail(errc::GLTF_ACCESSOR_INVALID, where,
            "/accessors/" + std::to_string(accessor_index) + " (" + semantic +
                "): Draco values do not fit its component type");
     const size_t element = static_cast<size_t>(componentBytes(accessor.componentType)) * components;
@@ -449,7 +449,7 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
     primitive.indices = static_cast<int>(model->accessors.size()) - 1;
   }
   if (primitive.indices >= static_cast<int>(model->accessors.size()))
-    fail("GLTF_ACCESSOR_INVALID", where, pointer + ": the indices accessor does not exist");
+    fail(errc::GLTF_ACCESSOR_INVALID, where, pointer + ": the indices accessor does not exist");
   if (!state->accessor_done[primitive.indices]) {
     tinygltf::Accessor& accessor = model->accessors[primitive.indices];
     const int size = componentBytes(accessor.componentType);
@@ -457,13 +457,13 @@ void decodeDracoPrimitive(tinygltf::Model* model, int mesh_index, int primitive_
         accessor.componentType == TINYGLTF_COMPONENT_TYPE_BYTE ||
         accessor.componentType == TINYGLTF_COMPONENT_TYPE_SHORT ||
         accessor.count != static_cast<size_t>(mesh.num_faces()) * 3)
-      fail("GLTF_ACCESSOR_INVALID", where,
+      fail(errc::GLTF_ACCESSOR_INVALID, where,
            "/accessors/" + std::to_string(primitive.indices) + " (indices) does not fit the Draco mesh's " +
                std::to_string(mesh.num_faces()) + " triangles");
     bool ok = true;
     const std::vector<unsigned char> bytes = convertIndices(mesh, accessor.componentType, &ok);
     if (!ok)
-      fail("GLTF_ACCESSOR_INVALID", where,
+      fail(errc::GLTF_ACCESSOR_INVALID, where,
            "/accessors/" + std::to_string(primitive.indices) + ": a Draco index does not fit its component type");
     accessor.bufferView = viewFor(model, payload, bytes, 0, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER, decoded, state);
     accessor.byteOffset = 0;

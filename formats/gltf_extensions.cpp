@@ -8,7 +8,7 @@
 
 #include <algorithm>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -78,7 +78,7 @@ void requireHonouredExtensions(const std::vector<std::string>& required, const s
   if (unhonoured.empty()) return;
   std::string names;
   for (const std::string& name : unhonoured) names += (names.empty() ? "" : ", ") + name;
-  fail("GLTF_EXTENSION_UNSUPPORTED", file,
+  fail(errc::GLTF_EXTENSION_UNSUPPORTED, file,
        "extensionsRequired names " + names + (unhonoured.size() == 1 ? ", an extension" : ", extensions") +
            " rigbake cannot honour, so the file cannot be read as its author meant (docs/extensions.md lists "
            "the extensions rigbake reads)");

@@ -12,7 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_json_value.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_accessor.h"
@@ -116,13 +116,13 @@ NodeTree buildNodeTree(const tinygltf::Model& model, const std::string& where) {
   for (int i = 0; i < n; ++i) {
     for (int child : model.nodes[i].children) {
       if (child < 0 || child >= n || tree.parent[child] != -1 || child == i)
-        fail("GLTF_PARSE_FAILED", where, "/nodes/" + std::to_string(i) + " has an invalid child " + std::to_string(child));
+        fail(errc::GLTF_PARSE_FAILED, where, "/nodes/" + std::to_string(i) + " has an invalid child " + std::to_string(child));
       tree.parent[child] = i;
     }
   }
   std::vector<char> visited(n, 0);
   std::function<void(int)> visit = [&](int node) {
-    if (visited[node]) fail("GLTF_PARSE_FAILED", where, "the node hierarchy has a cycle at /nodes/" + std::to_string(node));
+    if (visited[node]) fail(errc::GLTF_PARSE_FAILED, where, "the node hierarchy has a cycle at /nodes/" + std::to_string(node));
     visited[node] = 1;
     tree.world[node] = (tree.parent[node] >= 0 ? tree.world[tree.parent[node]] : Eigen::Affine3d::Identity()) *
                        nodeLocal(model.nodes[node]);
@@ -133,7 +133,7 @@ NodeTree buildNodeTree(const tinygltf::Model& model, const std::string& where) {
     if (tree.parent[i] == -1) visit(i);
   }
   for (int i = 0; i < n; ++i) {
-    if (!visited[i]) fail("GLTF_PARSE_FAILED", where, "the node hierarchy has a cycle at /nodes/" + std::to_string(i));
+    if (!visited[i]) fail(errc::GLTF_PARSE_FAILED, where, "the node hierarchy has a cycle at /nodes/" + std::to_string(i));
   }
   return tree;
 }
@@ -178,12 +178,12 @@ Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const
     if (skin.inverseBindMatrices >= 0) {
       ibm = readAccessor(model, skin.inverseBindMatrices, where);
       if (ibm.components != 16 || ibm.count < static_cast<int>(skin.joints.size()))
-        fail("GLTF_SKIN_INVALID", where, skin_where + "/inverseBindMatrices must hold one MAT4 per joint");
+        fail(errc::GLTF_SKIN_INVALID, where, skin_where + "/inverseBindMatrices must hold one MAT4 per joint");
     }
     for (size_t k = 0; k < skin.joints.size(); ++k) {
       int node = skin.joints[k];
       if (node < 0 || node >= node_count)
-        fail("GLTF_SKIN_INVALID", where, skin_where + "/joints/" + std::to_string(k) + " is not a node");
+        fail(errc::GLTF_SKIN_INVALID, where, skin_where + "/joints/" + std::to_string(k) + " is not a node");
       if (is_joint[node]) continue;
       is_joint[node] = 1;
       Eigen::Matrix4d inverse_bind = Eigen::Matrix4d::Identity();
@@ -192,12 +192,12 @@ Skeleton buildSkeleton(const tinygltf::Model& model, const NodeTree& tree, const
           for (int r = 0; r < 4; ++r) inverse_bind(r, c) = ibm.values[k * 16 + c * 4 + r];
       }
       if (std::abs(inverse_bind.determinant()) < 1e-30)
-        fail("GLTF_SKIN_INVALID", where, skin_where + "/inverseBindMatrices/" + std::to_string(k) + " is singular");
+        fail(errc::GLTF_SKIN_INVALID, where, skin_where + "/inverseBindMatrices/" + std::to_string(k) + " is singular");
       bind[node] = skin_to_world[s] * Eigen::Affine3d(inverse_bind.inverse());
       // A zero scale on a node above the skin (or a huge one) collapses or overflows the bind transform;
       // the pose code splits it into a rotation and a scale and needs every axis to have a length.
       if (!bind[node].matrix().allFinite() || !(std::abs(bind[node].linear().determinant()) >= 1e-30))
-        fail("GLTF_SKIN_INVALID", where, skin_where + "/joints/" + std::to_string(k) +
+        fail(errc::GLTF_SKIN_INVALID, where, skin_where + "/joints/" + std::to_string(k) +
                                              ": its bind transform (inverse bind matrix and the nodes above the skin) is degenerate");
     }
   }
@@ -239,7 +239,7 @@ std::vector<std::array<int, 3>> readTriangles(const tinygltf::Model& model, cons
     AccessorData data = readAccessor(model, primitive.indices, where);
     indices.reserve(data.values.size());
     for (double v : data.values) {
-      if (v < 0 || v >= vertex_count) fail("GLTF_ACCESSOR_INVALID", where, "a triangle index is out of range");
+      if (v < 0 || v >= vertex_count) fail(errc::GLTF_ACCESSOR_INVALID, where, "a triangle index is out of range");
       indices.push_back(static_cast<int>(v));
     }
   } else {
@@ -270,7 +270,7 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
     const tinygltf::Node& node = model.nodes[node_index];
     if (node.mesh < 0) continue;
     if (node.mesh >= static_cast<int>(model.meshes.size()))
-      fail("GLTF_PARSE_FAILED", where, "/nodes/" + std::to_string(node_index) + " refers to a missing mesh");
+      fail(errc::GLTF_PARSE_FAILED, where, "/nodes/" + std::to_string(node_index) + " refers to a missing mesh");
     const tinygltf::Mesh& mesh = model.meshes[node.mesh];
     const tinygltf::Skin* skin =
         node.skin >= 0 && node.skin < static_cast<int>(model.skins.size()) ? &model.skins[node.skin] : nullptr;
@@ -302,7 +302,7 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
       }
       part.rigid_joint = rigid_joint;
       AccessorData positions = readAccessor(model, position_it->second, where);
-      if (positions.components != 3) fail("GLTF_ACCESSOR_INVALID", where, "POSITION must be VEC3");
+      if (positions.components != 3) fail(errc::GLTF_ACCESSOR_INVALID, where, "POSITION must be VEC3");
       Eigen::Affine3d placement = to_world;
       if (skin) {
         // Skinned vertices live in bind space (glTF ignores the mesh node's own transform).
@@ -329,7 +329,7 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
           AccessorData weights = readAccessor(model, primitive.attributes.at("WEIGHTS_" + std::to_string(set)), where);
           if (joints.components != 4 || weights.components != 4 || joints.count != positions.count ||
               weights.count != positions.count)
-            fail("GLTF_ACCESSOR_INVALID", where, "JOINTS_/WEIGHTS_ must be VEC4 with one element per vertex");
+            fail(errc::GLTF_ACCESSOR_INVALID, where, "JOINTS_/WEIGHTS_ must be VEC4 with one element per vertex");
           for (int v = 0; v < positions.count; ++v) {
             for (int k = 0; k < 4; ++k) {
               double weight = weights.values[v * 4 + k];
@@ -337,7 +337,7 @@ void readMeshes(const tinygltf::Model& model, const NodeTree& tree, const Skelet
               size_t slot = static_cast<size_t>(v) * slots + set * 4 + k;
               if (weight == 0.0) continue;
               if (skin_joint < 0 || skin_joint >= static_cast<int>(skin->joints.size()))
-                fail("GLTF_ACCESSOR_INVALID", where, "a JOINTS_ index is outside the skin's joint list");
+                fail(errc::GLTF_ACCESSOR_INVALID, where, "a JOINTS_ index is outside the skin's joint list");
               part.joints[slot] = joint_of_node[skin->joints[skin_joint]];
               part.weights[slot] = weight;
             }
@@ -373,7 +373,7 @@ void readClips(const tinygltf::Model& model, const std::vector<int>& joint_of_no
       else if (channel.target_path == "scale") track.path = AnimatedPath::kScale;
       else continue;
       if (channel.sampler < 0 || channel.sampler >= static_cast<int>(animation.samplers.size()))
-        fail("GLTF_PARSE_FAILED", where, "/animations/" + std::to_string(a) + " has a channel without a sampler");
+        fail(errc::GLTF_PARSE_FAILED, where, "/animations/" + std::to_string(a) + " has a channel without a sampler");
       const tinygltf::AnimationSampler& sampler = animation.samplers[channel.sampler];
       track.interpolation = interpolationOf(sampler.interpolation);
       AccessorData input = readAccessor(model, sampler.input, where);
@@ -381,7 +381,7 @@ void readClips(const tinygltf::Model& model, const std::vector<int>& joint_of_no
       int width = track.path == AnimatedPath::kRotation ? 4 : 3;
       int per_key = track.interpolation == Interpolation::kCubicSpline ? 3 : 1;
       if (input.components != 1 || output.components != width || output.count != input.count * per_key)
-        fail("GLTF_ACCESSOR_INVALID", where,
+        fail(errc::GLTF_ACCESSOR_INVALID, where,
              "/animations/" + std::to_string(a) + " sampler " + std::to_string(channel.sampler) +
                  " has input/output counts that do not match");
       track.times = input.values;
@@ -476,7 +476,7 @@ std::string glbContainerProblem(const std::string& bytes) {
 // The Character of a model, whether a glTF file held it or formats/fbx_to_gltf.cpp built it.
 LoadedCharacter characterOf(std::shared_ptr<GltfDocument> document, const std::string& path) {
   const tinygltf::Model& model = document->model;
-  if (model.skins.empty()) fail("GLTF_NO_SKIN", path, "the file has no skin (a skinned character is needed)");
+  if (model.skins.empty()) fail(errc::GLTF_NO_SKIN, path, "the file has no skin (a skinned character is needed)");
 
   NodeTree tree = buildNodeTree(model, path);
   std::vector<int> joint_of_node;
@@ -507,7 +507,7 @@ LoadedCharacter loadCharacter(const std::string& path) {
   std::string bytes = readFile(path);
   if (bytes.compare(0, 4, "glTF") == 0) {
     const std::string problem = glbContainerProblem(bytes);
-    if (!problem.empty()) fail("GLTF_PARSE_FAILED", path, problem);
+    if (!problem.empty()) fail(errc::GLTF_PARSE_FAILED, path, problem);
   }
   prepareCompressedGltf(&bytes);
   auto document = std::make_shared<GltfDocument>();
@@ -522,13 +522,13 @@ LoadedCharacter loadCharacter(const std::string& path) {
   } else {
     size_t first = bytes.find_first_not_of(" \t\r\n\xEF\xBB\xBF");
     if (first == std::string::npos || bytes[first] != '{')
-      fail("GLTF_PARSE_FAILED", path, "not a glTF file (neither GLB magic 'glTF' nor a JSON object)");
+      fail(errc::GLTF_PARSE_FAILED, path, "not a glTF file (neither GLB magic 'glTF' nor a JSON object)");
     ok = loader.LoadASCIIFromString(&document->model, &err, &warn, bytes.data(),
                                     static_cast<unsigned int>(bytes.size()), directoryOf(path));
   }
   if (!ok) {
     requireHonouredExtensions(requiredExtensionsOf(bytes), path);
-    fail("GLTF_PARSE_FAILED", path, firstLine(err));
+    fail(errc::GLTF_PARSE_FAILED, path, firstLine(err));
   }
   requireHonouredExtensions(document->model.extensionsRequired, path);
   decompressGltf(&document->model, path);

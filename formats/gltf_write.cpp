@@ -28,7 +28,7 @@
 #include <streambuf>
 #include <ostream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_document.h"
 
@@ -96,10 +96,10 @@ StandAlone standAloneLayout(tinygltf::Model model) {
     tinygltf::BufferView& view = model.bufferViews[v];
     std::string where = "/bufferViews/" + std::to_string(v);
     if (view.buffer < 0 || view.buffer >= static_cast<int>(out.sources.size()))
-      fail("GLTF_PARSE_FAILED", where, "refers to a missing buffer " + std::to_string(view.buffer));
+      fail(errc::GLTF_PARSE_FAILED, where, "refers to a missing buffer " + std::to_string(view.buffer));
     const std::vector<unsigned char>& data = out.sources[view.buffer].data;
     if (view.byteOffset > data.size() || view.byteLength > data.size() - view.byteOffset)
-      fail("GLTF_PARSE_FAILED", where, "lies outside its buffer (" + std::to_string(data.size()) + " bytes)");
+      fail(errc::GLTF_PARSE_FAILED, where, "lies outside its buffer (" + std::to_string(data.size()) + " bytes)");
     const size_t offset = alignedLike(end, view.byteOffset);
     out.pieces.push_back(BinPiece{data.data() + view.byteOffset, view.byteLength, offset});
     end = offset + view.byteLength;
@@ -115,7 +115,7 @@ StandAlone standAloneLayout(tinygltf::Model model) {
     // An external image the loader could not read stays a reference: there is nothing to embed.
     if (image.image.empty()) continue;
     if (!image.as_is)
-      fail("INTERNAL", "/images/" + std::to_string(i),
+      fail(errc::INTERNAL, "/images/" + std::to_string(i),
            "the image holds decoded pixels, not its file bytes; load it with the raw-bytes image loader");
     tinygltf::BufferView view;
     view.buffer = 0;
@@ -139,6 +139,94 @@ StandAlone standAloneLayout(tinygltf::Model model) {
   out.bin_size = end;
   if (!out.model.bufferViews.empty()) out.model.buffers.emplace_back();
   return out;
+}
+
+// tinygltf 2.7 writes an empty object or array nested in an extension or extras as null (its ValueToJson
+// builds a JSON value from members only), and glTF has no null: a VRM 0.x avatar's
+// "floatProperties": {} came out as null (found by the validator pass over every model the test suite
+// writes). Each empty one is swapped for a marker string before serialization, and the marker for {}
+// or [] in the JSON text after. A null it drops instead (NULL_TYPE) never reaches the text.
+constexpr const char* kEmptyObjectMarker = "\"rigbake:empty-object:3f9d2c\"";
+constexpr const char* kEmptyArrayMarker = "\"rigbake:empty-array:3f9d2c\"";
+
+void markEmptyValues(tinygltf::Value* value) {
+  if (value->IsObject()) {
+    auto& members = value->Get<tinygltf::Value::Object>();
+    if (members.empty()) {
+      *value = tinygltf::Value(std::string(kEmptyObjectMarker + 1, std::strlen(kEmptyObjectMarker) - 2));
+      return;
+    }
+    for (auto& member : members) markEmptyValues(&member.second);
+  } else if (value->IsArray()) {
+    auto& items = value->Get<tinygltf::Value::Array>();
+    if (items.empty()) {
+      *value = tinygltf::Value(std::string(kEmptyArrayMarker + 1, std::strlen(kEmptyArrayMarker) - 2));
+      return;
+    }
+    for (auto& item : items) markEmptyValues(&item);
+  }
+}
+
+template <typename Part>
+void markEmptyValuesOf(Part* part) {
+  markEmptyValues(&part->extras);
+  for (auto& extension : part->extensions) markEmptyValues(&extension.second);
+}
+
+template <typename Part>
+void markEmptyValuesOfEach(std::vector<Part>* parts) {
+  for (Part& part : *parts) markEmptyValuesOf(&part);
+}
+
+// Every extras and extension value of the model (tinygltf 2.7's 26 kinds of glTF object).
+void markEmptyValuesInModel(tinygltf::Model* model) {
+  markEmptyValuesOf(model);
+  markEmptyValuesOf(&model->asset);
+  markEmptyValuesOfEach(&model->accessors);
+  markEmptyValuesOfEach(&model->buffers);
+  markEmptyValuesOfEach(&model->bufferViews);
+  markEmptyValuesOfEach(&model->images);
+  markEmptyValuesOfEach(&model->samplers);
+  markEmptyValuesOfEach(&model->textures);
+  markEmptyValuesOfEach(&model->skins);
+  markEmptyValuesOfEach(&model->scenes);
+  markEmptyValuesOfEach(&model->nodes);
+  for (tinygltf::Animation& animation : model->animations) {
+    markEmptyValuesOf(&animation);
+    markEmptyValuesOfEach(&animation.channels);
+    markEmptyValuesOfEach(&animation.samplers);
+  }
+  for (tinygltf::Material& material : model->materials) {
+    markEmptyValuesOf(&material);
+    markEmptyValuesOf(&material.pbrMetallicRoughness);
+    markEmptyValuesOf(&material.pbrMetallicRoughness.baseColorTexture);
+    markEmptyValuesOf(&material.pbrMetallicRoughness.metallicRoughnessTexture);
+    markEmptyValuesOf(&material.normalTexture);
+    markEmptyValuesOf(&material.occlusionTexture);
+    markEmptyValuesOf(&material.emissiveTexture);
+  }
+  for (tinygltf::Mesh& mesh : model->meshes) {
+    markEmptyValuesOf(&mesh);
+    markEmptyValuesOfEach(&mesh.primitives);
+  }
+  for (tinygltf::Camera& camera : model->cameras) {
+    markEmptyValuesOf(&camera);
+    markEmptyValuesOf(&camera.perspective);
+    markEmptyValuesOf(&camera.orthographic);
+  }
+  for (tinygltf::Light& light : model->lights) {
+    markEmptyValuesOf(&light);
+    markEmptyValuesOf(&light.spot);
+  }
+}
+
+// The JSON text with every marker replaced by what it stands for (a marker is a JSON string token, so
+// it cannot appear by accident inside another string: its quotes would be escaped there).
+void restoreEmptyValues(std::string* json) {
+  for (const auto& [marker, empty] : {std::pair<const char*, const char*>{kEmptyObjectMarker, "{}"}, {kEmptyArrayMarker, "[]"}}) {
+    const size_t length = std::strlen(marker);
+    for (size_t at = json->find(marker); at != std::string::npos; at = json->find(marker, at + 2)) json->replace(at, length, empty);
+  }
 }
 
 // Appends everything written to it to a string the caller owns, so the serialized bytes are not
@@ -170,7 +258,7 @@ std::string tinygltfBytes(const tinygltf::Model& model, bool binary) {
   StringAppender appender(&bytes);
   std::ostream stream(&appender);
   if (!writer.WriteGltfSceneToStream(&model, stream, /*prettyPrint=*/!binary, /*writeBinary=*/binary))
-    fail("INTERNAL", "", "tinygltf could not serialize the model");
+    fail(errc::INTERNAL, "", "tinygltf could not serialize the model");
   return bytes;
 }
 
@@ -189,6 +277,7 @@ std::string assembleGlb(const StandAlone& layout) {
   for (int b = 0; b < 4; ++b) json_chunk |= static_cast<uint32_t>(static_cast<unsigned char>(empty_glb[12 + b])) << (8 * b);
   std::string json = empty_glb.substr(20, json_chunk);
   while (!json.empty() && json.back() == ' ') json.pop_back();
+  restoreEmptyValues(&json);
   std::string().swap(empty_glb);
   if (!layout.model.buffers.empty()) {
     const std::string placeholder = "\"buffers\":[{\"byteLength\":0}]";
@@ -210,7 +299,7 @@ std::string assembleGlb(const StandAlone& layout) {
         --depth;
       }
     }
-    if (at == std::string::npos) fail("INTERNAL", "", "tinygltf wrote the merged buffer in an unexpected form");
+    if (at == std::string::npos) fail(errc::INTERNAL, "", "tinygltf wrote the merged buffer in an unexpected form");
     const std::string length_key = "\"buffers\":[{\"byteLength\":";
     json.replace(at + length_key.size(), 1, std::to_string(layout.bin_size));
   }
@@ -267,6 +356,7 @@ std::string glbOf(const std::string& path, const GltfDocument& document) {
 }
 
 std::string serializeGltf(tinygltf::Model model, bool binary) {
+  markEmptyValuesInModel(&model);
   StandAlone layout = standAloneLayout(std::move(model));
   if (binary) return assembleGlb(layout);
   // A .gltf embeds the buffer as base64: tinygltf needs the merged bytes in the model.
@@ -277,7 +367,9 @@ std::string serializeGltf(tinygltf::Model model, bool binary) {
       if (piece.size > 0) std::memcpy(bytes.data() + piece.offset, piece.data, piece.size);
   }
   std::vector<tinygltf::Buffer>().swap(layout.sources);
-  return tinygltfBytes(layout.model, /*binary=*/false);
+  std::string text = tinygltfBytes(layout.model, /*binary=*/false);
+  restoreEmptyValues(&text);
+  return text;
 }
 
 void writeGltf(tinygltf::Model model, const std::string& path) {

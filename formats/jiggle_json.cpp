@@ -1,6 +1,6 @@
 #include "formats/jiggle_json.h"
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/point_formula.h"
 #include "formats/json_reader.h"
 
@@ -28,7 +28,7 @@ Eigen::Vector3d direction(const JsonReader& in) {
 }  // namespace
 
 JigglePreset parseJigglePreset(const nlohmann::json& json, const std::string& file) {
-  JsonReader in(json, file, "", "PRESET_INVALID");
+  JsonReader in(json, file, "", errc::PRESET_INVALID);
   in.allowKeys({"$schema", "name", "description", "jiggles"});
   JigglePreset preset;
   preset.file = file;
@@ -49,7 +49,7 @@ JigglePreset parseJigglePreset(const nlohmann::json& json, const std::string& fi
     if (item.has("landmark")) {
       entry.landmark = item.at("landmark").asString();
       if (!isCanonicalLandmark(entry.landmark))
-        fail("PRESET_LANDMARK_UNKNOWN", whereOf(item.at("landmark")),
+        fail(errc::PRESET_LANDMARK_UNKNOWN, whereOf(item.at("landmark")),
              "'" + entry.landmark + "' is not a canonical landmark (see docs/landmarks.md)");
     }
     for (const char* key : {"joint", "landmark", "muscle"}) {
@@ -84,7 +84,7 @@ JigglePreset parseJigglePreset(const nlohmann::json& json, const std::string& fi
 JigglePreset readJigglePreset(const std::string& path) { return parseJigglePreset(readJsonFile(path), path); }
 
 std::vector<HitImpulse> parseHits(const nlohmann::json& json, const std::string& file) {
-  JsonReader in(json, file, "", "HITS_INVALID");
+  JsonReader in(json, file, "", errc::HITS_INVALID);
   in.allowKeys({"$schema", "description", "hits"});
   if (in.has("description")) in.at("description").asString();
   const JsonReader hits = in.at("hits");

@@ -5,7 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 
 namespace rigbake {
@@ -21,7 +21,7 @@ nlohmann::json readJsonFile(const std::string& path) {
     size_t end_of_tag = message.find("] ");
     if (message.rfind("[json.exception", 0) == 0 && end_of_tag != std::string::npos)
       message = message.substr(end_of_tag + 2);
-    fail("JSON_PARSE_FAILED", path, message);
+    fail(errc::JSON_PARSE_FAILED, path, message);
   }
 }
 
@@ -38,7 +38,7 @@ std::string escapePointerToken(const std::string& token) {
 }  // namespace
 
 void JsonReader::fail(const std::string& message) const {
-  rigbake::fail(code_, file_ + "#" + (pointer_.empty() ? "/" : pointer_), message);
+  rigbake::fail(*code_, file_ + "#" + (pointer_.empty() ? "/" : pointer_), message);
 }
 
 void JsonReader::requireObject() const {
@@ -51,7 +51,7 @@ void JsonReader::allowKeys(const std::vector<std::string>& allowed) const {
     if (std::find(allowed.begin(), allowed.end(), it.key()) == allowed.end()) {
       std::string list;
       for (const std::string& key : allowed) list += (list.empty() ? "" : ", ") + key;
-      JsonReader(it.value(), file_, pointer_ + "/" + escapePointerToken(it.key()), code_)
+      JsonReader(it.value(), file_, pointer_ + "/" + escapePointerToken(it.key()), *code_)
           .fail("unknown key '" + it.key() + "' (allowed: " + list + ")");
     }
   }
@@ -62,12 +62,12 @@ bool JsonReader::has(const std::string& key) const { return value_.is_object() &
 JsonReader JsonReader::at(const std::string& key) const {
   requireObject();
   if (!value_.contains(key)) fail("missing required key '" + key + "'");
-  return JsonReader(value_.at(key), file_, pointer_ + "/" + escapePointerToken(key), code_);
+  return JsonReader(value_.at(key), file_, pointer_ + "/" + escapePointerToken(key), *code_);
 }
 
 JsonReader JsonReader::at(size_t index) const {
   if (!value_.is_array() || index >= value_.size()) fail("missing array element " + std::to_string(index));
-  return JsonReader(value_.at(index), file_, pointer_ + "/" + std::to_string(index), code_);
+  return JsonReader(value_.at(index), file_, pointer_ + "/" + std::to_string(index), *code_);
 }
 
 size_t JsonReader::arraySize() const {

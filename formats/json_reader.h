@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/error.h"
+
 namespace rigbake {
 
 // Parses a file; throws IO_FILE_NOT_FOUND or JSON_PARSE_FAILED (with line/column).
@@ -13,8 +15,9 @@ nlohmann::json readJsonFile(const std::string& path);
 
 class JsonReader {
  public:
-  JsonReader(const nlohmann::json& value, std::string file, std::string pointer, std::string error_code)
-      : value_(value), file_(std::move(file)), pointer_(std::move(pointer)), code_(std::move(error_code)) {}
+  // `error_code`: the code every failure of this reader and the readers it hands out carries.
+  JsonReader(const nlohmann::json& value, std::string file, std::string pointer, const ErrorCode& error_code)
+      : value_(value), file_(std::move(file)), pointer_(std::move(pointer)), code_(&error_code) {}
 
   const nlohmann::json& value() const { return value_; }
   const std::string& pointer() const { return pointer_; }
@@ -43,7 +46,7 @@ class JsonReader {
   const nlohmann::json& value_;
   std::string file_;
   std::string pointer_;
-  std::string code_;
+  const ErrorCode* code_;  // a symbol of core/error.h
 };
 
 // "presets/skeletons/mixamo.json" -> "mixamo": the name a preset gets when it gives none.

@@ -7,7 +7,7 @@
 #include <tuple>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 #include "formats/json_reader.h"
 #include "formats/json_text.h"
@@ -44,7 +44,7 @@ void requireWithinReach(const JsonReader& in, const Eigen::Vector3d& world, doub
   }
 }
 
-const char* kMusclesCode = "MUSCLES_INVALID";
+const ErrorCode& kMusclesCode = errc::MUSCLES_INVALID;
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 
 nlohmann::json curveJson(const std::vector<ResponseKey>& keys, double at_unit) {
@@ -175,7 +175,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
       if (part.kind == PartKind::kCorrective) {
         part.carrier_landmark = item.at("carrier_landmark").asString();
         if (!landmarks.has(part.carrier_landmark))
-          rigbake::fail("MUSCLES_MISMATCH", path + "#" + item.at("carrier_landmark").pointer(),
+          rigbake::fail(errc::MUSCLES_MISMATCH, path + "#" + item.at("carrier_landmark").pointer(),
                         "carrier landmark '" + part.carrier_landmark + "' is not resolved on " + set.character);
         part.carrier = landmarks.get(part.carrier_landmark).joint;
       } else if (item.has("carrier_landmark")) {
@@ -190,7 +190,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
         std::string joint_name = loc.at("joint").asString();
         int joint = skeleton.find(joint_name);
         if (joint < 0)
-          rigbake::fail("MUSCLES_MISMATCH", path + "#" + loc.at("joint").pointer(),
+          rigbake::fail(errc::MUSCLES_MISMATCH, path + "#" + loc.at("joint").pointer(),
                         "joint '" + joint_name + "' is not in " + set.character + " (is this muscle file for another character? use rigbake retarget)");
         MuscleLocator read;
         read.joint = joint;
@@ -247,7 +247,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
           for (const std::string& c : candidates) {
             if (landmarks.has(sidedName(c, side))) return landmarks.get(sidedName(c, side)).joint;
           }
-          rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
+          rigbake::fail(errc::MUSCLES_MISMATCH, path + "#" + group.pointer(),
                         "no attach landmark of " + full + " is resolved on " + set.character);
         };
         int origin_joint = attach(spec.origin_attach);
@@ -265,7 +265,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
         if (part.kind == PartKind::kCorrective) {
           part.carrier_landmark = sidedName(carrier, side);
           if (!landmarks.has(part.carrier_landmark))
-            rigbake::fail("MUSCLES_MISMATCH", path + "#" + group.pointer(),
+            rigbake::fail(errc::MUSCLES_MISMATCH, path + "#" + group.pointer(),
                           "carrier landmark '" + part.carrier_landmark + "' of " + full + " is not resolved on " + set.character);
           part.carrier = landmarks.get(part.carrier_landmark).joint;
         }

@@ -3,7 +3,7 @@
 // Vertex"); the header only says how to slice them.
 #include "formats/packed_file.h"
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/atomic_file.h"
 
 namespace rigbake {
@@ -26,25 +26,25 @@ std::uint32_t getLe(const std::string& bytes, size_t offset, int size) {
 }
 
 [[noreturn]] void invalid(const std::string& where, const std::string& message) {
-  fail("PACKED_FILE_INVALID", where, message);
+  fail(errc::PACKED_FILE_INVALID, where, message);
 }
 
 }  // namespace
 
 std::string encodePackedFile(const std::vector<PackedInfluences>& parts) {
-  if (parts.empty()) fail("INTERNAL", "", "a packed influence file needs at least one mesh part");
+  if (parts.empty()) fail(errc::INTERNAL, "", "a packed influence file needs at least one mesh part");
   const PackedInfluences& first = parts.front();
   std::uint64_t vertices = 0;
   for (size_t p = 0; p < parts.size(); ++p) {
     const PackedInfluences& part = parts[p];
     std::string problem = packedInfluencesProblem(part);
-    if (!problem.empty()) fail("INTERNAL", "", "packed part " + std::to_string(p) + ": " + problem);
+    if (!problem.empty()) fail(errc::INTERNAL, "", "packed part " + std::to_string(p) + ": " + problem);
     if (part.influences != first.influences || part.index_bytes != first.index_bytes ||
         part.joint_count != first.joint_count)
-      fail("INTERNAL", "", "packed part " + std::to_string(p) + " differs in layout from part 0");
+      fail(errc::INTERNAL, "", "packed part " + std::to_string(p) + " differs in layout from part 0");
     vertices += static_cast<std::uint64_t>(part.vertex_count);
   }
-  if (vertices > 0xffffffffu) fail("INTERNAL", "", "more vertices than a packed file header can count");
+  if (vertices > 0xffffffffu) fail(errc::INTERNAL, "", "more vertices than a packed file header can count");
   const int words = packedWeightWords(first.influences);
   const int stride = packedIndexStride(first.influences, first.index_bytes);
   std::string out;

@@ -3,7 +3,7 @@
 
 #include <png.h>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/base64.h"
 
 namespace rigbake {
@@ -20,7 +20,7 @@ std::string encodePng(const RgbImage& image) {
   png_alloc_size_t size = PNG_IMAGE_PNG_SIZE_MAX(description);
   std::string out(size, '\0');
   if (!png_image_write_to_memory(&description, out.data(), &size, 0, image.pixels.data(), 0, nullptr))
-    fail("INTERNAL", "", std::string("PNG encoding failed: ") + description.message);
+    fail(errc::INTERNAL, "", std::string("PNG encoding failed: ") + description.message);
   out.resize(size);
   png_image_free(&description);
   return out;

@@ -3,20 +3,20 @@
 #include <algorithm>
 #include <dirent.h>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/json_reader.h"
 
 namespace rigbake {
 namespace {
 
-const char* kPresetCode = "PRESET_INVALID";
+const ErrorCode& kPresetCode = errc::PRESET_INVALID;
 
 void requireLandmark(const JsonReader& where, const std::string& name) {
   if (!isCanonicalLandmark(name)) {
     std::string known;
     for (const std::string& central : centralLandmarks()) known += central + " ";
     for (const std::string& sided : sidedLandmarks()) known += sided + " ";
-    fail("PRESET_LANDMARK_UNKNOWN", where.file() + "#" + where.pointer(),
+    fail(errc::PRESET_LANDMARK_UNKNOWN, where.file() + "#" + where.pointer(),
          "'" + name + "' is not a canonical landmark (known: " + known + "; sided names may end in _l or _r)");
   }
 }
@@ -128,7 +128,7 @@ std::vector<NamingMap> readNamingMaps(const std::string& directory) {
     }
     closedir(dir);
   } else {
-    fail("IO_FILE_NOT_FOUND", directory, "the naming map directory cannot be read");
+    fail(errc::IO_FILE_NOT_FOUND, directory, "the naming map directory cannot be read");
   }
   std::sort(files.begin(), files.end());
   std::vector<NamingMap> maps;

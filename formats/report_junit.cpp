@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/point_formula.h"
 #include "formats/json_reader.h"
 
@@ -44,9 +44,9 @@ std::string romLandmark(const JsonReader& in) {
   if (!central && !isSidedBase(name)) {
     const std::string where = in.file() + "#" + in.pointer();
     if (isCanonicalLandmark(name))
-      fail("PRESET_LANDMARK_UNKNOWN", where,
+      fail(errc::PRESET_LANDMARK_UNKNOWN, where,
            "'" + name + "': name the landmark without _l/_r; a sided clip is built for both sides, mirrored");
-    fail("PRESET_LANDMARK_UNKNOWN", where, "'" + name + "' is not a canonical landmark (see docs/landmarks.md)");
+    fail(errc::PRESET_LANDMARK_UNKNOWN, where, "'" + name + "' is not a canonical landmark (see docs/landmarks.md)");
   }
   return name;
 }
@@ -114,7 +114,7 @@ void collectLandmarks(const RomMotion& motion, std::vector<std::string>* names) 
 }  // namespace
 
 RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file) {
-  JsonReader in(json, file, "", "PRESET_INVALID");
+  JsonReader in(json, file, "", errc::PRESET_INVALID);
   in.allowKeys({"$schema", "name", "description", "animation_prefix", "keys_per_second", "clips"});
   RomPreset preset;
   preset.file = file;

@@ -8,7 +8,7 @@ namespace rigbake {
 
 ValidationConfig readValidationConfig(const std::string& path) {
   const nlohmann::json json = readJsonFile(path);
-  JsonReader root(json, path, "", "VALIDATE_CONFIG_INVALID");
+  JsonReader root(json, path, "", errc::VALIDATE_CONFIG_INVALID);
   root.requireObject();
   root.allowKeys({"$schema", "description", "checks"});
   ValidationConfig config;

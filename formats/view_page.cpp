@@ -9,7 +9,7 @@
 #include <set>
 #include <system_error>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/base64.h"
 #include "formats/atomic_file.h"
 
@@ -105,19 +105,19 @@ void writeViewDirectory(const std::string& dir, const std::map<std::string, std:
   fs::path target = fs::path(dir);
   if (target.filename().empty()) target = target.parent_path();  // "out/" -> "out"
   const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-  if (!fs::is_directory(parent, error)) fail("IO_WRITE_FAILED", dir, "the parent directory " + parent.string() + " does not exist");
+  if (!fs::is_directory(parent, error)) fail(errc::IO_WRITE_FAILED, dir, "the parent directory " + parent.string() + " does not exist");
   const bool exists = fs::exists(target, error);
   if (exists) {
-    if (!fs::is_directory(target, error)) fail("IO_WRITE_FAILED", dir, "exists and is not a directory");
+    if (!fs::is_directory(target, error)) fail(errc::IO_WRITE_FAILED, dir, "exists and is not a directory");
     for (const fs::directory_entry& entry : fs::directory_iterator(target, error)) {
       const std::string name = entry.path().filename().string();
       if (!files.count(name) || !entry.is_regular_file())
-        fail("IO_WRITE_FAILED", dir,
+        fail(errc::IO_WRITE_FAILED, dir,
              "exists and holds '" + name + "', which rigbake view did not write: remove the directory or choose another -o");
     }
   }
   std::string temp = target.string() + ".rigbake-tmp-XXXXXX";
-  if (!mkdtemp(temp.data())) fail("IO_WRITE_FAILED", dir, std::string("cannot create a temporary directory: ") + std::strerror(errno));
+  if (!mkdtemp(temp.data())) fail(errc::IO_WRITE_FAILED, dir, std::string("cannot create a temporary directory: ") + std::strerror(errno));
   try {
     fs::permissions(temp, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec | fs::perms::others_read |
                               fs::perms::others_exec);
@@ -129,25 +129,25 @@ void writeViewDirectory(const std::string& dir, const std::map<std::string, std:
         // names the page's file there (a full disk named the temporary folder, gone by then).
         const std::string prefix = error.code() + " " + error.where() + ": ";
         const std::string what = error.what();
-        fail(error.code(), dir + "/" + name, what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+        fail(error.errorCode(), dir + "/" + name, what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
       }
     }
     if (exists) {
       // rename() cannot replace a non-empty directory: move the old one aside, put the new one in
       // place, then delete the old. Between the two renames `dir` is absent for an instant, never partial.
       std::string old = target.string() + ".rigbake-tmp-XXXXXX";
-      if (!mkdtemp(old.data())) fail("IO_WRITE_FAILED", dir, std::string("cannot create a temporary directory: ") + std::strerror(errno));
+      if (!mkdtemp(old.data())) fail(errc::IO_WRITE_FAILED, dir, std::string("cannot create a temporary directory: ") + std::strerror(errno));
       fs::remove(old);
       if (std::rename(target.c_str(), old.c_str()) != 0)
-        fail("IO_WRITE_FAILED", dir, std::string("cannot move the previous page aside: ") + std::strerror(errno));
+        fail(errc::IO_WRITE_FAILED, dir, std::string("cannot move the previous page aside: ") + std::strerror(errno));
       if (std::rename(temp.c_str(), target.c_str()) != 0) {
         const std::string reason = std::strerror(errno);
         std::rename(old.c_str(), target.c_str());
-        fail("IO_WRITE_FAILED", dir, "cannot move the finished page into place: " + reason);
+        fail(errc::IO_WRITE_FAILED, dir, "cannot move the finished page into place: " + reason);
       }
       fs::remove_all(old, error);
     } else if (std::rename(temp.c_str(), target.c_str()) != 0) {
-      fail("IO_WRITE_FAILED", dir, std::string("cannot move the finished page into place: ") + std::strerror(errno));
+      fail(errc::IO_WRITE_FAILED, dir, std::string("cannot move the finished page into place: ") + std::strerror(errno));
     }
   } catch (...) {
     fs::remove_all(temp, error);

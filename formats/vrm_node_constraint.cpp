@@ -14,7 +14,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_json_value.h"
 
 namespace rigbake {
@@ -34,7 +34,7 @@ int constraintSource(const tinygltf::Value& extension) {
 
 void addVrmAimConstraints(tinygltf::Model* model, const std::vector<VrmAimConstraint>& constraints) {
   if (model->extensions.count("VRMC_vrm") == 0)
-    fail("USAGE", "--helper-joints", "node constraints can only be exported into a VRM 1.0 model");
+    fail(errc::USAGE, "--helper-joints", "node constraints can only be exported into a VRM 1.0 model");
   if (constraints.empty()) return;
   const int node_count = static_cast<int>(model->nodes.size());
   std::vector<int> parent(node_count, -1);
@@ -53,12 +53,12 @@ void addVrmAimConstraints(tinygltf::Model* model, const std::vector<VrmAimConstr
   for (const VrmAimConstraint& c : constraints) {
     for (int node : {c.destination, c.source}) {
       if (node < 0 || node >= node_count)
-        fail("GLTF_PARSE_FAILED", "/nodes/" + std::to_string(node), "a node constraint names no such node");
+        fail(errc::GLTF_PARSE_FAILED, "/nodes/" + std::to_string(node), "a node constraint names no such node");
     }
     const std::string where = "/nodes/" + std::to_string(c.destination) + "/extensions/" + kVrmNodeConstraintExtension;
-    if (c.source == c.destination) fail("GLTF_PARSE_FAILED", where, "a constraint's source must not be its destination");
+    if (c.source == c.destination) fail(errc::GLTF_PARSE_FAILED, where, "a constraint's source must not be its destination");
     if (!source_of.emplace(c.destination, c.source).second)
-      fail("GLTF_PARSE_FAILED", where, "the node already has a constraint");
+      fail(errc::GLTF_PARSE_FAILED, where, "the node already has a constraint");
   }
   // The constraints a constraint waits for: those on its source and the source's ancestors, and on its
   // destination's ancestors.
@@ -79,7 +79,7 @@ void addVrmAimConstraints(tinygltf::Model* model, const std::vector<VrmAimConstr
       const int n = stack.back();
       stack.pop_back();
       if (n == c.destination)
-        fail("GLTF_PARSE_FAILED", "/nodes/" + std::to_string(c.destination) + "/extensions/" + kVrmNodeConstraintExtension,
+        fail(errc::GLTF_PARSE_FAILED, "/nodes/" + std::to_string(c.destination) + "/extensions/" + kVrmNodeConstraintExtension,
              "the constraint's source depends on the constraint itself (a circular dependency)");
       if (!seen.insert(n).second) continue;
       for (int next : dependencies(n)) stack.push_back(next);

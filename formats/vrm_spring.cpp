@@ -13,7 +13,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/gltf_json_value.h"
 
 namespace rigbake {
@@ -66,16 +66,16 @@ std::vector<VrmSpring> vrmSpringsForSkeleton(const Skeleton& skeleton, const std
 void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& springs) {
   const bool vrm1 = model->extensions.count("VRMC_vrm") > 0;
   const bool vrm0 = model->extensions.count("VRM") > 0;
-  if (!vrm1 && !vrm0) fail("USAGE", "--jiggle", "spring bones can only be exported into a VRM (0.x or 1.0) model");
+  if (!vrm1 && !vrm0) fail(errc::USAGE, "--jiggle", "spring bones can only be exported into a VRM (0.x or 1.0) model");
   for (const VrmSpring& spring : springs) {
     if (spring.head_node < 0 || spring.head_node >= static_cast<int>(model->nodes.size()))
-      fail("GLTF_PARSE_FAILED", "/nodes/" + std::to_string(spring.head_node), "spring '" + spring.name + "' has no such node");
+      fail(errc::GLTF_PARSE_FAILED, "/nodes/" + std::to_string(spring.head_node), "spring '" + spring.name + "' has no such node");
   }
   if (vrm1) {
     nlohmann::json extension = model->extensions.count("VRMC_springBone")
                                    ? toJsonValue(model->extensions["VRMC_springBone"])
                                    : nlohmann::json{{"specVersion", "1.0"}};
-    if (!extension.is_object()) fail("GLTF_PARSE_FAILED", "/extensions/VRMC_springBone", "must be an object");
+    if (!extension.is_object()) fail(errc::GLTF_PARSE_FAILED, "/extensions/VRMC_springBone", "must be an object");
     if (!extension.contains("springs")) extension["springs"] = nlohmann::json::array();
     for (const VrmSpring& spring : springs) {
       const int tail = addTail(model, spring);
@@ -94,10 +94,10 @@ void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& spr
     return;
   }
   nlohmann::json extension = toJsonValue(model->extensions["VRM"]);
-  if (!extension.is_object()) fail("GLTF_PARSE_FAILED", "/extensions/VRM", "must be an object");
+  if (!extension.is_object()) fail(errc::GLTF_PARSE_FAILED, "/extensions/VRM", "must be an object");
   nlohmann::json& secondary = extension["secondaryAnimation"];
   if (secondary.is_null()) secondary = nlohmann::json::object();
-  if (!secondary.is_object()) fail("GLTF_PARSE_FAILED", "/extensions/VRM/secondaryAnimation", "must be an object");
+  if (!secondary.is_object()) fail(errc::GLTF_PARSE_FAILED, "/extensions/VRM/secondaryAnimation", "must be an object");
   if (!secondary.contains("boneGroups")) secondary["boneGroups"] = nlohmann::json::array();
   if (!secondary.contains("colliderGroups")) secondary["colliderGroups"] = nlohmann::json::array();
   for (const VrmSpring& spring : springs) {

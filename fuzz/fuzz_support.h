@@ -16,7 +16,7 @@
 #include <filesystem>
 #include <string>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake::fuzz {
 
@@ -53,7 +53,7 @@ inline std::string inputFile(const std::string& name, const std::uint8_t* data, 
 // Aborts (a finding) unless `error` is what a user may see: a documented code and one printable line.
 inline void checkError(const Error& error) {
   bool known = false;
-  for (const ErrorCodeInfo& info : errorCodes()) known = known || error.code() == info.code;
+  for (const ErrorCode& info : kErrorCodes) known = known || error.code() == info.name;
   const std::string line = printableLine(std::string(error.what()));
   if (!known || error.exitCode() == ExitCode::kInternal || line.find('\n') != std::string::npos) {
     std::fprintf(stderr, "rigbake fuzz: an error users must not see: code %s: %s\n", error.code().c_str(), line.c_str());

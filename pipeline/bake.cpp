@@ -5,7 +5,7 @@
 #include <cassert>
 #include <chrono>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "pipeline/surface_graph.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
@@ -195,17 +195,17 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   };
   const Skeleton& skeleton = character.skeleton;
   if (!isPackedInfluenceCount(options.influences))
-    fail("USAGE", "--influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
-  if (options.fps < 0) fail("USAGE", "--fps", "must be positive, or 0 for the clips' own key times");
+    fail(errc::USAGE, "--influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
+  if (options.fps < 0) fail(errc::USAGE, "--fps", "must be positive, or 0 for the clips' own key times");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
-    if (!problem.empty()) fail("MUSCLES_MISMATCH", muscles.character, part.fullName() + ": " + problem);
+    if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);
   }
   for (const JiggleSetup& setup : options.jiggles) {
     std::string problem = jiggleSetupProblem(setup, skeleton);
     if (setup.host == JiggleHost::kMuscle && (setup.muscle < 0 || setup.muscle >= static_cast<int>(muscles.parts.size())))
       problem = "names no muscle of this muscle set";
-    if (!problem.empty()) fail("JIGGLE_UNRESOLVED", setup.name, problem);
+    if (!problem.empty()) fail(errc::JIGGLE_UNRESOLVED, setup.name, problem);
   }
   checkHits(options.hits, options.jiggles);
   BakeResult result;
@@ -237,7 +237,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     const MeshPart& mesh = character.meshes[body.mesh_part[s]];
     InfluenceSet base = influencesFromMesh(mesh);
     if (!checkInfluences(base, skeleton.size()).empty())
-      fail("GLTF_ACCESSOR_INVALID", character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
+      fail(errc::GLTF_ACCESSOR_INVALID, character.source, "mesh '" + mesh.name + "' has invalid skin weights (negative, NaN or all zero)");
     MeasuredPart part;
     part.mesh_part = body.mesh_part[s];
     part.input = normalizedInfluences(base, options.threads);
@@ -423,7 +423,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
         }
         const int local = local_of[influences.joints[k]];
         if (local < 0)
-          fail("GLTF_SKIN_INVALID", character.source, "mesh '" + mesh.name + "' is weighted to a joint outside its skin");
+          fail(errc::GLTF_SKIN_INVALID, character.source, "mesh '" + mesh.name + "' is weighted to a joint outside its skin");
         influences.joints[k] = local;
       }
       return influences;

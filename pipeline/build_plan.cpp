@@ -4,7 +4,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -50,10 +50,10 @@ std::vector<int> buildOrder(const BuildManifest& manifest) {
       if (c.muscles_from.empty()) break;
       int source = characterIndex(manifest, c.muscles_from);
       if (source < 0)
-        fail("MANIFEST_INVALID", manifest.file + "#" + c.pointer + "/muscles_from",
+        fail(errc::MANIFEST_INVALID, manifest.file + "#" + c.pointer + "/muscles_from",
              "no character named '" + c.muscles_from + "' in the manifest");
       if (state[source] == 1)
-        fail("MANIFEST_INVALID", manifest.file + "#" + c.pointer + "/muscles_from",
+        fail(errc::MANIFEST_INVALID, manifest.file + "#" + c.pointer + "/muscles_from",
              "muscles_from makes a cycle through '" + c.muscles_from + "'");
       at = source;
     }

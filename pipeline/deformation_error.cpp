@@ -8,7 +8,7 @@
 #include <limits>
 #include <map>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 
@@ -19,7 +19,7 @@ namespace {
 void requireVertices(const InfluenceSet& set, size_t vertices, const char* name) {
   if (set.slots_per_vertex <= 0 || set.joints.size() != set.weights.size() ||
       set.joints.size() != vertices * static_cast<size_t>(set.slots_per_vertex))
-    fail("INTERNAL", "", std::string("skinningDeformationError: ") + name + " influences do not match the " +
+    fail(errc::INTERNAL, "", std::string("skinningDeformationError: ") + name + " influences do not match the " +
                              std::to_string(vertices) + " positions");
 }
 
@@ -33,7 +33,7 @@ void requireJoints(const InfluenceSet& reference, const InfluenceSet& approximat
         const size_t index = static_cast<size_t>(v) * set->slots_per_vertex + k;
         const int joint = set->joints[index];
         if (set->weights[index] == 0.0 || (joint >= 0 && joint < static_cast<int>(joints))) continue;
-        fail("INTERNAL", "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " but there are " +
+        fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " but there are " +
                                  std::to_string(joints) + " skin matrices");
       }
     }
@@ -163,7 +163,7 @@ DeformationError combineDeformationErrors(const DeformationError& a, const Defor
 
 double maxWeightDifference(const InfluenceSet& a, const InfluenceSet& b) {
   if (a.vertexCount() != b.vertexCount())
-    fail("INTERNAL", "", "maxWeightDifference: the sets have different vertex counts");
+    fail(errc::INTERNAL, "", "maxWeightDifference: the sets have different vertex counts");
   double largest = 0.0;
   for (int v = 0; v < a.vertexCount(); ++v) {
     // Slots may be ordered differently (requantizing can reorder equal weights), so compare by joint.

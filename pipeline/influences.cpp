@@ -12,7 +12,7 @@
 #include <functional>
 #include <utility>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "pipeline/parallel.h"
 
 namespace rigbake {
@@ -39,7 +39,7 @@ struct IntegerSlot {
 
 void requireShape(int slots_per_vertex, size_t joints, size_t weights, const char* what) {
   if (slots_per_vertex <= 0 || joints != weights || joints % static_cast<size_t>(slots_per_vertex) != 0)
-    fail("INTERNAL", "", std::string(what) + ": joints and weights do not hold whole vertices");
+    fail(errc::INTERNAL, "", std::string(what) + ": joints and weights do not hold whole vertices");
 }
 
 // A stable sort for the few slots of one vertex: insertion sort, which allocates nothing (std::stable_sort
@@ -85,10 +85,10 @@ const std::vector<Slot>& canonicalSlots(const InfluenceSet& set, int vertex, Ver
     size_t index = static_cast<size_t>(vertex) * slots + k;
     double weight = set.weights[index];
     if (!std::isfinite(weight) || weight < 0.0)
-      fail("INTERNAL", "", "vertex " + std::to_string(vertex) + " has a negative or non-finite weight");
+      fail(errc::INTERNAL, "", "vertex " + std::to_string(vertex) + " has a negative or non-finite weight");
     if (weight == 0.0) continue;
     if (set.joints[index] < 0)
-      fail("INTERNAL", "", "vertex " + std::to_string(vertex) + " has a negative joint index");
+      fail(errc::INTERNAL, "", "vertex " + std::to_string(vertex) + " has a negative joint index");
     out.push_back({set.joints[index], weight});
   }
   std::sort(out.begin(), out.end(), [](const Slot& a, const Slot& b) { return a.joint < b.joint; });
@@ -118,7 +118,7 @@ void distributeMissingUnits(std::vector<IntegerSlot>& slots, const std::vector<R
   for (size_t k = 0; k < slots.size(); ++k) {
     if (eligible[k]) rank.push_back(k);
   }
-  if (rank.empty()) fail("INTERNAL", "", "a vertex has no weight to quantize");
+  if (rank.empty()) fail(errc::INTERNAL, "", "a vertex has no weight to quantize");
   stableSortSmall(rank.begin(), rank.end(), [&](size_t a, size_t b) { return remainders[a] > remainders[b]; });
   // Exact arithmetic leaves 0 <= missing < rank.size(). Floating-point shares can stray by an ulp, so
   // the loops also cope with a surplus and wrap around instead of trusting that bound.
@@ -149,7 +149,7 @@ void writeCanonical(std::vector<IntegerSlot>& slots, int slots_per_vertex, size_
 
 void requireFullScale(int full_scale) {
   if (full_scale < 1 || full_scale > 65535)
-    fail("INTERNAL", "", "full scale " + std::to_string(full_scale) + " does not fit 16-bit weights");
+    fail(errc::INTERNAL, "", "full scale " + std::to_string(full_scale) + " does not fit 16-bit weights");
 }
 
 }  // namespace
@@ -208,7 +208,7 @@ std::vector<InfluenceIssue> checkInfluences(const InfluenceSet& set, int joint_c
 
 InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences, int threads) {
   requireShape(set.slots_per_vertex, set.joints.size(), set.weights.size(), "pruneInfluences");
-  if (max_influences < 1) fail("INTERNAL", "", "pruneInfluences needs at least one influence per vertex");
+  if (max_influences < 1) fail(errc::INTERNAL, "", "pruneInfluences needs at least one influence per vertex");
   InfluenceSet out;
   out.slots_per_vertex = max_influences;
   const int vertices = set.vertexCount();
@@ -218,7 +218,7 @@ InfluenceSet pruneInfluences(const InfluenceSet& set, int max_influences, int th
     VertexScratch scratch;
     for (int v = begin; v < end; ++v) {
       const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
-      if (slots.empty()) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to prune");
+      if (slots.empty()) fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " has no weight to prune");
       const size_t count = std::min(slots.size(), static_cast<size_t>(max_influences));
       double kept = 0.0;
       for (size_t k = 0; k < count; ++k) kept += slots[k].weight;
@@ -246,7 +246,7 @@ QuantizedInfluences quantizeInfluences(const InfluenceSet& set, int full_scale, 
       const std::vector<Slot>& slots = canonicalSlots(set, v, &scratch);
       double sum = 0.0;
       for (const Slot& slot : slots) sum += slot.weight;
-      if (!(sum > 0.0)) fail("INTERNAL", "", "vertex " + std::to_string(v) + " has no weight to quantize");
+      if (!(sum > 0.0)) fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " has no weight to quantize");
       std::vector<IntegerSlot>& units = scratch.units;
       std::vector<double>& remainders = scratch.remainders;
       units.resize(slots.size());
@@ -296,7 +296,7 @@ QuantizedInfluences requantizeInfluences(const QuantizedInfluences& quantized, i
         sum += quantized.weights[base + k];
       }
       if (sum != old_scale)
-        fail("INTERNAL", "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not " +
+        fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not " +
                                  std::to_string(old_scale));
       distributeMissingUnits(units, remainders, eligible, full_scale, &scratch.rank);
       writeCanonical(units, slots, base, &out);
@@ -323,7 +323,7 @@ InfluenceSet dequantizeInfluences(const QuantizedInfluences& quantized, int thre
 std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluences& quantized, int joint_count,
                                                         WeightStorage storage, int threads) {
   if (joint_count < 1 || joint_count > 65536)
-    fail("INTERNAL", "", "glTF joint indices are at most 16 bits; joint count " + std::to_string(joint_count));
+    fail(errc::INTERNAL, "", "glTF joint indices are at most 16 bits; joint count " + std::to_string(joint_count));
   const bool byte_weights = storage == WeightStorage::kUnsignedByte;
   QuantizedInfluences stored =
       requantizeInfluences(quantized, byte_weights ? kUnsignedByteScale : kUnsignedShortScale, threads);
@@ -356,7 +356,7 @@ std::vector<VertexAttributeData> standardSkinAttributes(const QuantizedInfluence
           unsigned joint = k < slots ? static_cast<unsigned>(stored.joints[index]) : 0u;
           unsigned weight = k < slots ? stored.weights[index] : 0u;
           if (joint >= static_cast<unsigned>(joint_count))
-            fail("INTERNAL", "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) +
+            fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) +
                                      " of " + std::to_string(joint_count));
           const size_t field = 4 * static_cast<size_t>(v) + static_cast<size_t>(c);
           put(joints.bytes.data() + field * joint_bytes, joint, joint_bytes);

@@ -24,7 +24,7 @@
 #include <functional>
 #include <limits>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/landmarks.h"
 #include "anatomy/muscle_set.h"
 #include "pipeline/checks.h"
@@ -468,14 +468,14 @@ std::vector<JiggleSetup> resolveJiggles(const JigglePreset& preset, const Skelet
   auto resolveJoint = [&](const std::string& where, const std::string& name, bool landmark) {
     if (!landmark) {
       const int joint = skeleton.find(name);
-      if (joint < 0) fail("JIGGLE_UNRESOLVED", where, "joint '" + name + "' is not in the skeleton");
+      if (joint < 0) fail(errc::JIGGLE_UNRESOLVED, where, "joint '" + name + "' is not in the skeleton");
       return joint;
     }
     if (!landmarks || !landmarks->has(name))
-      fail("JIGGLE_UNRESOLVED", where, "landmark '" + name + "' is not resolved on this character");
+      fail(errc::JIGGLE_UNRESOLVED, where, "landmark '" + name + "' is not resolved on this character");
     const Landmark& found = landmarks->get(name);
     if (found.from_joint.empty())
-      fail("JIGGLE_UNRESOLVED", where,
+      fail(errc::JIGGLE_UNRESOLVED, where,
            "landmark '" + name + "' is derived (" + found.derived + "), not a joint: a jiggle needs a joint to rotate");
     return found.joint;
   };
@@ -493,9 +493,9 @@ std::vector<JiggleSetup> resolveJiggles(const JigglePreset& preset, const Skelet
           }
         }
       }
-      if (!part) fail("JIGGLE_UNRESOLVED", entry.where, "muscle '" + entry.muscle + "' is not among the placed muscles");
+      if (!part) fail(errc::JIGGLE_UNRESOLVED, entry.where, "muscle '" + entry.muscle + "' is not among the placed muscles");
       const std::string problem = musclePartProblem(*part, skeleton);
-      if (!problem.empty()) fail("JIGGLE_UNRESOLVED", entry.where, "muscle '" + entry.muscle + "': " + problem);
+      if (!problem.empty()) fail(errc::JIGGLE_UNRESOLVED, entry.where, "muscle '" + entry.muscle + "': " + problem);
       const MuscleRestFrame rest = muscleRestFrame(*part, skeleton);
       setup.name = part->fullName() + "_muscleSkinned";
       setup.host = JiggleHost::kMuscle;
@@ -517,7 +517,7 @@ std::vector<JiggleSetup> resolveJiggles(const JigglePreset& preset, const Skelet
       if (by_landmark) setup.parts.push_back(entry.landmark);
       if (entry.has_major_axis) setup.major_axis = entry.major_axis;
       if (setup.length <= 0.0)
-        fail("JIGGLE_UNRESOLVED", entry.where,
+        fail(errc::JIGGLE_UNRESOLVED, entry.where,
              "joint '" + skeleton.names[joint] + "' has no child and no parent to take a direction and length from: give axis and length");
     }
     if (!entry.root.empty()) {
@@ -535,13 +535,13 @@ std::vector<JiggleSetup> resolveJiggles(const JigglePreset& preset, const Skelet
     }
     // A major axis given with (or against) the aim: keep only its part perpendicular to the aim.
     const Eigen::Vector3d major = setup.major_axis - setup.major_axis.dot(setup.aim_axis) * setup.aim_axis;
-    if (major.norm() < 1e-6) fail("JIGGLE_UNRESOLVED", entry.where, "major_axis is parallel to the aim axis");
+    if (major.norm() < 1e-6) fail(errc::JIGGLE_UNRESOLVED, entry.where, "major_axis is parallel to the aim axis");
     setup.major_axis = major.normalized();
     for (const JiggleSetup& earlier : setups) {
-      if (earlier.name == setup.name) fail("JIGGLE_UNRESOLVED", entry.where, "'" + setup.name + "' already has a jiggle");
+      if (earlier.name == setup.name) fail(errc::JIGGLE_UNRESOLVED, entry.where, "'" + setup.name + "' already has a jiggle");
     }
     const std::string problem = jiggleSetupProblem(setup, skeleton);
-    if (!problem.empty()) fail("JIGGLE_UNRESOLVED", entry.where, problem);
+    if (!problem.empty()) fail(errc::JIGGLE_UNRESOLVED, entry.where, problem);
     setups.push_back(std::move(setup));
   }
   return setups;
@@ -557,7 +557,7 @@ void checkHits(const std::vector<HitImpulse>& hits, const std::vector<JiggleSetu
         std::string names;
         for (const JiggleSetup& setup : setups)
           for (const std::string& name : setup.parts) names += (names.empty() ? "" : ", ") + name;
-        fail("HITS_INVALID", hit.where, "'" + part + "' reaches no jiggle (parts with a jiggle: " + names + ")");
+        fail(errc::HITS_INVALID, hit.where, "'" + part + "' reaches no jiggle (parts with a jiggle: " + names + ")");
       }
     }
   }

@@ -5,24 +5,24 @@
 // functions the packer uses, so the table cannot drift from the bytes the bake writes.
 #include "pipeline/memory_table.h"
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "pipeline/pack_influences.h"
 
 namespace rigbake {
 
 int gltfSkinBytesPerVertex(int slots, int weight_component_bytes, int joint_component_bytes) {
-  if (slots <= 0 || slots % 4 != 0) fail("INTERNAL", "", "glTF skin slots come in sets of 4");
+  if (slots <= 0 || slots % 4 != 0) fail(errc::INTERNAL, "", "glTF skin slots come in sets of 4");
   return slots * (weight_component_bytes + joint_component_bytes);
 }
 
 int packedSkinBytesPerVertex(int influences, int index_bytes) {
-  if (!isPackedInfluenceCount(influences)) fail("INTERNAL", "", "packed layouts hold 4, 7 or 10 influences");
+  if (!isPackedInfluenceCount(influences)) fail(errc::INTERNAL, "", "packed layouts hold 4, 7 or 10 influences");
   if (index_bytes == 4) return packedWeightWords(influences) * 4 + influences * 4;
   return packedWeightWords(influences) * 4 + packedIndexStride(influences, index_bytes);
 }
 
 std::vector<SkinLayoutSize> skinMemoryTable(std::int64_t vertex_count) {
-  if (vertex_count < 0) fail("INTERNAL", "", "negative vertex count");
+  if (vertex_count < 0) fail(errc::INTERNAL, "", "negative vertex count");
   std::vector<SkinLayoutSize> rows;
   auto add_gltf = [&](const std::string& weights_name, int weight_component, const std::string& joints_name,
                       int joint_component) {

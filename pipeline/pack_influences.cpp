@@ -13,7 +13,7 @@
 
 #include <algorithm>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 
 namespace rigbake {
 
@@ -25,9 +25,9 @@ constexpr std::uint32_t kReservedBitsMask = 0xC0000000u;
 
 void requireLayout(int influences, int index_bytes) {
   if (!isPackedInfluenceCount(influences))
-    fail("INTERNAL", "", "packed influences are 4, 7 or 10 per vertex, not " + std::to_string(influences));
+    fail(errc::INTERNAL, "", "packed influences are 4, 7 or 10 per vertex, not " + std::to_string(influences));
   if (index_bytes != 1 && index_bytes != 2)
-    fail("INTERNAL", "", "packed joint indices are 1 or 2 bytes, not " + std::to_string(index_bytes));
+    fail(errc::INTERNAL, "", "packed joint indices are 1 or 2 bytes, not " + std::to_string(index_bytes));
 }
 
 int storedWeight(const PackedInfluences& packed, int vertex, int slot) {
@@ -79,7 +79,7 @@ int packedIndexStride(int influences, int index_bytes) { return (influences * in
 
 int packedIndexBytesFor(int joint_count) {
   if (joint_count < 1 || joint_count > 65536)
-    fail("INTERNAL", "", "packed joint indices are at most 16 bits; joint count " + std::to_string(joint_count));
+    fail(errc::INTERNAL, "", "packed joint indices are at most 16 bits; joint count " + std::to_string(joint_count));
   return joint_count <= 256 ? 1 : 2;
 }
 
@@ -87,12 +87,12 @@ PackedInfluences packInfluences(const QuantizedInfluences& quantized, int joint_
   const int n = quantized.slots_per_vertex;
   requireLayout(n, index_bytes);
   if (quantized.full_scale != kMilliScale)
-    fail("INTERNAL", "", "packed weights are in units of 1/1000, not 1/" + std::to_string(quantized.full_scale));
+    fail(errc::INTERNAL, "", "packed weights are in units of 1/1000, not 1/" + std::to_string(quantized.full_scale));
   if (joint_count < 1 || joint_count > (index_bytes == 1 ? 256 : 65536))
-    fail("INTERNAL", "", std::to_string(joint_count) + " joints do not fit " + std::to_string(8 * index_bytes) +
+    fail(errc::INTERNAL, "", std::to_string(joint_count) + " joints do not fit " + std::to_string(8 * index_bytes) +
                              "-bit indices");
   if (quantized.weights.size() != quantized.joints.size() || quantized.joints.size() % n != 0)
-    fail("INTERNAL", "", "packInfluences: joints and weights do not hold whole vertices");
+    fail(errc::INTERNAL, "", "packInfluences: joints and weights do not hold whole vertices");
   PackedInfluences packed;
   packed.influences = n;
   packed.index_bytes = index_bytes;
@@ -110,7 +110,7 @@ PackedInfluences packInfluences(const QuantizedInfluences& quantized, int joint_
       int weight = quantized.weights[base + k];
       sum += weight;
       if (joint < 0 || joint >= joint_count)
-        fail("INTERNAL", "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " of " +
+        fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " names joint " + std::to_string(joint) + " of " +
                                  std::to_string(joint_count));
       if (k < n - 1) {
         packed.weight_words[static_cast<size_t>(v) * words + k / kPackedWeightsPerWord] |=
@@ -123,7 +123,7 @@ PackedInfluences packInfluences(const QuantizedInfluences& quantized, int joint_
     // The decoder rebuilds slot N-1 as 1000 minus the rest, which is this vertex's slot only when the
     // sum is exact; each weight is at most 1000 < 1024, so it fits its field.
     if (sum != kMilliScale)
-      fail("INTERNAL", "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not 1000");
+      fail(errc::INTERNAL, "", "vertex " + std::to_string(v) + " weights sum to " + std::to_string(sum) + ", not 1000");
   }
   return packed;
 }
@@ -173,7 +173,7 @@ std::string packedInfluencesProblem(const PackedInfluences& packed) {
 
 QuantizedInfluences unpackInfluences(const PackedInfluences& packed) {
   std::string problem = packedInfluencesProblem(packed);
-  if (!problem.empty()) fail("INTERNAL", "", "unpackInfluences: " + problem);
+  if (!problem.empty()) fail(errc::INTERNAL, "", "unpackInfluences: " + problem);
   const int n = packed.influences;
   QuantizedInfluences out;
   out.slots_per_vertex = n;
@@ -195,7 +195,7 @@ QuantizedInfluences unpackInfluences(const PackedInfluences& packed) {
 
 std::vector<VertexAttributeData> packedGltfAttributes(const PackedInfluences& packed) {
   std::string problem = packedInfluencesProblem(packed);
-  if (!problem.empty()) fail("INTERNAL", "", "packedGltfAttributes: " + problem);
+  if (!problem.empty()) fail(errc::INTERNAL, "", "packedGltfAttributes: " + problem);
   const int words = packedWeightWords(packed.influences);
   std::vector<std::uint8_t> weight_bytes;
   weight_bytes.reserve(packed.weight_words.size() * 4);

@@ -23,7 +23,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/point_formula.h"
 #include "pipeline/pose.h"
 
@@ -366,7 +366,7 @@ RomResult buildRom(const Character& character, const LandmarkSet& landmarks, con
     if (known) continue;
     std::string names;
     for (const RomClipSpec& spec : preset.clips) names += (names.empty() ? "" : ", ") + spec.name;
-    fail("ROM_CLIP_UNKNOWN", preset.file, "no clip '" + name + "' in the ROM preset (it has: " + names + ")");
+    fail(errc::ROM_CLIP_UNKNOWN, preset.file, "no clip '" + name + "' in the ROM preset (it has: " + names + ")");
   }
   RomContext context;
   context.character = &character;
@@ -384,14 +384,14 @@ RomResult buildRom(const Character& character, const LandmarkSet& landmarks, con
       if (!sweeps.back().problem.empty() && problem.empty()) problem = sweeps.back().problem;
     }
     if (!problem.empty()) {
-      if (requested) fail("ROM_CLIP_UNAVAILABLE", character.source, "ROM clip '" + spec.name + "' " + problem);
+      if (requested) fail(errc::ROM_CLIP_UNAVAILABLE, character.source, "ROM clip '" + spec.name + "' " + problem);
       result.skipped.push_back({spec.name, problem});
       continue;
     }
     RomClip clip = buildClip(context, preset, spec, sweeps);
     for (const Clip& own : character.clips) {
       if (own.name == clip.clip.name && !own.measure_only)
-        fail("ROM_CLIP_EXISTS", character.source,
+        fail(errc::ROM_CLIP_EXISTS, character.source,
              "the character already has an animation named '" + own.name +
                  "' (is it a ROM output already?); use a ROM preset with another animation_prefix");
     }
@@ -401,7 +401,7 @@ RomResult buildRom(const Character& character, const LandmarkSet& landmarks, con
     std::string why;
     for (const RomSkipped& skipped : result.skipped)
       why += (why.empty() ? "" : "; ") + skipped.name + ": " + skipped.reason;
-    fail("ROM_CLIP_UNAVAILABLE", character.source,
+    fail(errc::ROM_CLIP_UNAVAILABLE, character.source,
          "no ROM clip can be built (" + (why.empty() ? "the preset has none" : why) + ")");
   }
   return result;

@@ -10,7 +10,7 @@
 #include <numeric>
 #include <string>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "pipeline/parallel.h"
 #include "pipeline/skinning.h"
 
@@ -59,7 +59,7 @@ void mergeSlots(const std::array<SetWeights, kSkinSets>& sets, size_t v, MergeSc
   vertex->pivot = -1;
   auto slotOf = [&](int joint) {
     if (joint < 0 || joint > std::numeric_limits<std::uint16_t>::max())
-      fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " out of range");
+      fail(errc::INTERNAL, "", "skinning batch: joint " + std::to_string(joint) + " out of range");
     if (static_cast<size_t>(joint) >= slot_of_joint.size()) slot_of_joint.resize(static_cast<size_t>(joint) + 1, -1);
     int& slot = slot_of_joint[static_cast<size_t>(joint)];
     if (slot < 0) {
@@ -202,7 +202,7 @@ SkinningBatch buildSkinningBatch(const std::vector<Eigen::Vector3d>& bind_positi
         size_t count = 0;
         for (const auto& [joint, joint_weights] : scratch.sorted) {
           if (joint_weights[0] != 0.0 && joint >= dual_quaternion_joints)
-            fail("INTERNAL", "", "skinning batch: joint " + std::to_string(joint) + " has no dual quaternion");
+            fail(errc::INTERNAL, "", "skinning batch: joint " + std::to_string(joint) + " has no dual quaternion");
           if (joint < dual_quaternion_joints) ++count;
         }
         vertex.dual_quaternion_slots = static_cast<std::uint8_t>(std::min<size_t>(count, 255));

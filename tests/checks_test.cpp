@@ -7,7 +7,7 @@
 
 #include <limits>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "formats/validate_config.h"
 #include "pipeline/muscle_joint.h"
 #include "validate_fixture.h"

@@ -100,7 +100,7 @@ TEST_CASE("cli build: a character whose file puts invalid UTF-8 into its error f
   std::ofstream(dir / "p/manifest.json") << manifest.dump(2);
   test::CliResult run = runCli("build " + ext::shellQuote(dir / "p/manifest.json") + " --json");
   INFO(run.err);
-  CHECK(run.exit_code == 1);
+  CHECK(run.exit_code == 4);
   CHECK(run.err.find("INTERNAL") == std::string::npos);
   const nlohmann::json summary = summaryOf(dir / "p/out");
   CHECK(statusOf(summary, "garbled") == "failed");
@@ -117,7 +117,7 @@ TEST_CASE("cli build: every character gets its outputs and a summary, a broken o
   const std::string manifest = writeManifest(dir, "p", nlohmann::json::array({{{"name", "broken"}, {"input", "broken.glb"}}}));
   test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " -j 2 --progress always");
   INFO(run.err);
-  CHECK(run.exit_code == 1);
+  CHECK(run.exit_code == 4);
   CHECK(run.err.find("FAILED broken: GLTF_PARSE_FAILED") != std::string::npos);
   CHECK(run.err.find("BUILD_FAILED") != std::string::npos);
   CHECK(run.err.find("] hero: built") != std::string::npos);  // a line per character as it finishes
@@ -436,7 +436,7 @@ TEST_CASE("cli build: a character whose muscles_from source failed has a coded l
                                       {{"name", "follower"}, {"input", "sample.glb"}, {"muscles_from", "broken"}}});
   const test::CliResult run = runCli("build " + ext::shellQuote(manifest) + " -j 1");
   INFO(run.err);
-  CHECK(run.exit_code == 1);
+  CHECK(run.exit_code == 4);
   CHECK(run.err.find("FAILED follower: BUILD_SOURCE_FAILED " + manifest + "#/characters/2/muscles_from: muscles_from character 'broken' failed") !=
         std::string::npos);
   const auto summary = nlohmann::json::parse(slurp(dir / "p/out/summary.json"));

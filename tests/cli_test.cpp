@@ -14,7 +14,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli_support.h"
 #include "glb_support.h"
 #include "external_tools.h"
@@ -223,6 +223,29 @@ TEST_CASE("cli: place writes byte-identical JSON on every run") {
   }
 }
 
+// The suite's last ctest validates every model the cases wrote from the copies RIGBAKE_KEEP_OUTPUTS
+// makes (tests/validate_suite_outputs.js): the copies must be made, whole, and only of models.
+TEST_CASE("cli: RIGBAKE_KEEP_OUTPUTS copies every model a run writes, and nothing else") {
+  TempDir dir, kept;
+  const std::string environment = "RIGBAKE_KEEP_OUTPUTS=" + ext::shellQuote(kept.path.string());
+  REQUIRE(runCli("sample -o " + (dir / "sample.glb"), environment).exit_code == 0);
+  REQUIRE(runCli("place " + (dir / "sample.glb") + " -o " + (dir / "muscles.json"), environment).exit_code == 0);
+  REQUIRE(runCli("bake " + (dir / "sample.glb") + " --muscles " + (dir / "muscles.json") + " -o " + (dir / "baked.gltf") +
+                     " --stats " + (dir / "stats.json"),
+                 environment).exit_code == 0);
+  std::vector<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(kept.path)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return a.substr(a.rfind('-')) < b.substr(b.rfind('-'));
+  });
+  REQUIRE(names.size() == 2);
+  CHECK(names[0].size() > std::string("-0-baked.gltf").size());
+  CHECK(names[0].substr(names[0].rfind('-')) == "-baked.gltf");
+  CHECK(names[1].substr(names[1].rfind('-')) == "-sample.glb");
+  CHECK(slurp(kept / names[0]) == slurp(dir / "baked.gltf"));
+  CHECK(slurp(kept / names[1]) == slurp(dir / "sample.glb"));
+}
+
 TEST_CASE("cli: landmarks --json follows the documented contract") {
   CliResult r = runCli("landmarks --json " + sampleGlbPathForCli());
   REQUIRE(r.exit_code == 0);
@@ -261,13 +284,23 @@ TEST_CASE("cli: errors lists every code with its exit status") {
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.find("LANDMARK_UNRESOLVED\t3") != std::string::npos);
   CHECK(r.out.find("IO_FILE_NOT_FOUND\t2") != std::string::npos);
+  CHECK(r.out.find("BUILD_FAILED\t4") != std::string::npos);
+  CHECK(r.out.find("USAGE\t1") != std::string::npos);
+  // The docs' table has one row per code of core/error.h's table, in its order, with its exit status.
   std::string doc = slurp(sourceDir() + "/docs/errors.md");
-  std::istringstream lines(r.out);
-  for (std::string line; std::getline(lines, line);) {
-    std::string code = line.substr(0, line.find('\t'));
-    INFO(code);
-    CHECK(doc.find("`" + code + "`") != std::string::npos);
+  std::vector<std::string> documented, printed;
+  std::istringstream doc_lines(doc.substr(doc.find("\n## Codes\n") + 1));
+  for (std::string line; std::getline(doc_lines, line);) {
+    if (line.rfind("## ", 0) == 0 && line != "## Codes") break;  // the Blender add-on's codes follow
+    if (line.rfind("| `", 0) != 0) continue;
+    const size_t code_end = line.find("` | ");
+    const size_t exit_end = line.find(" |", code_end + 4);
+    documented.push_back(line.substr(3, code_end - 3) + "\t" + line.substr(code_end + 4, exit_end - code_end - 4));
   }
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) printed.push_back(line.substr(0, line.find('\t', line.find('\t') + 1)));
+  CHECK(printed.size() == std::size(kErrorCodes));
+  CHECK(documented == printed);
 }
 
 TEST_CASE("errors: one printable line of valid UTF-8, whatever bytes the input put into the message") {
@@ -281,7 +314,7 @@ TEST_CASE("errors: one printable line of valid UTF-8, whatever bytes the input p
   CHECK(printableLine("\xC0\xAF") == "\\xC0\\xAF");
   CHECK(printableLine("\xED\xA0\x80") == "\\xED\\xA0\\x80");
   CHECK(printableLine("two\nlines\tand\x7F") == "two\\x0Alines\\x09and\\x7F");
-  const rigbake::Error error("GLTF_PARSE_FAILED", "bad\x85.glb", "read '\xFF'\n");
+  const rigbake::Error error(errc::GLTF_PARSE_FAILED, "bad\x85.glb", "read '\xFF'\n");
   CHECK(std::string(error.what()) == "GLTF_PARSE_FAILED bad\\x85.glb: read '\\xFF'\\x0A");
   CHECK(error.where() == "bad\\x85.glb");
   // Through the CLI: the JSON parser quotes the bad byte it read.

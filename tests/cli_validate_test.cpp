@@ -94,7 +94,7 @@ TEST_CASE("cli validate: a muscle locator 1 m off fails LOCATOR_NEAR_SURFACE wit
   test::CliResult run =
       runCli("validate " + ext::shellQuote(bake.glb) + " --muscles " + ext::shellQuote(edited) + " --report " + ext::shellQuote(dir));
   INFO(run.err);
-  CHECK(run.exit_code == 1);
+  CHECK(run.exit_code == 4);
   CHECK(run.err.find("LOCATOR_NEAR_SURFACE " + moved + "/origin: error:") != std::string::npos);
   const nlohmann::json report = nlohmann::json::parse(slurp(dir + "/report.json"));
   CHECK(report["passed"] == false);
@@ -130,7 +130,7 @@ TEST_CASE("cli validate: --config overrides a threshold, a malformed config is e
                                   " --report " + ext::shellQuote(out / "strict"));
   INFO(strict.err);
   // 16-bit WEIGHTS_n and 0.001 packed weights differ by rounding, so a zero tolerance fails.
-  CHECK(strict.exit_code == 1);
+  CHECK(strict.exit_code == 4);
   CHECK(checkIn(nlohmann::json::parse(slurp(out / "strict/report.json")), "PACKED_DEFORMATION_ERROR")["status"] == "fail");
 
   std::ofstream(config) << R"({"checks": {"PACKED_DEFORMATION_ERROR": {"limit": 0.0}}})";

@@ -11,7 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "external_tools.h"

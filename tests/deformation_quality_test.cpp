@@ -255,7 +255,7 @@ TEST_CASE("validate: a rig that pulls a region in fails SKIN_REGION_VOLUME_LOSS,
   REQUIRE(r.exit_code == 0);
   CliResult v = runCli("validate " + (dir / "baked.glb") + " --report " + (dir / "report") + " --no-pictures");
   INFO(v.err);
-  CHECK(v.exit_code == 1);
+  CHECK(v.exit_code == 4);
   CHECK(v.err.find("SKIN_REGION_VOLUME_LOSS ") != std::string::npos);
   nlohmann::json report = nlohmann::json::parse(slurp(dir / "report/report.json"));
   CHECK(report["deformation_quality"]["pictures"].empty());

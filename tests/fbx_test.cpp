@@ -9,7 +9,7 @@
 #include <map>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "external_tools.h"

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli_support.h"
 #include "glb_support.h"
 

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <map>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "test_support.h"

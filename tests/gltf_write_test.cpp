@@ -6,7 +6,7 @@
 #include <fstream>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/sample_character.h"
 #include "external_tools.h"
 #include "formats/atomic_file.h"
@@ -98,6 +98,30 @@ TEST_CASE("serialization is byte-deterministic") {
   writeGltf(model, dir.file("b.vrm"));
   CHECK(readFile(dir.file("a.vrm")) == readFile(dir.file("b.vrm")));
   CHECK(readFile(dir.file("a.vrm")) == serializeGltf(model, true));
+}
+
+TEST_CASE("empty objects and arrays in extensions and extras are written as {} and [], never null") {
+  // tinygltf 2.7 alone writes each of these as null (a VRM 0.x avatar's "floatProperties": {}).
+  tinygltf::Model model = smallSampleModel(SampleVrm::kNone);
+  tinygltf::Value::Object nested;
+  nested["floatProperties"] = tinygltf::Value(tinygltf::Value::Object{});
+  nested["boneGroups"] = tinygltf::Value(tinygltf::Value::Array{});
+  nested["deeper"] = tinygltf::Value(tinygltf::Value::Array{tinygltf::Value(tinygltf::Value::Object{}), tinygltf::Value(1.5)});
+  model.extensions["EXT_test_empty"] = tinygltf::Value(nested);
+  model.nodes[0].extras = tinygltf::Value(nested);
+  model.materials[0].pbrMetallicRoughness.extras = tinygltf::Value(nested);
+  for (bool binary : {true, false}) {
+    INFO((binary ? "GLB" : "glTF"));
+    const std::string bytes = serializeGltf(model, binary);
+    const nlohmann::json json = binary ? glbJson(bytes) : nlohmann::json::parse(bytes);
+    for (const nlohmann::json* value : {&json["extensions"]["EXT_test_empty"], &json["nodes"][0]["extras"],
+                                        &json["materials"][0]["pbrMetallicRoughness"]["extras"]}) {
+      CHECK((*value)["floatProperties"] == nlohmann::json::object());
+      CHECK((*value)["boneGroups"] == nlohmann::json::array());
+      CHECK((*value)["deeper"] == nlohmann::json::parse("[{}, 1.5]"));
+    }
+    CHECK(bytes.find("rigbake:empty-") == std::string::npos);
+  }
 }
 
 TEST_CASE("GLB output is one well-formed container with one BIN chunk") {

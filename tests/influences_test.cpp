@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "influence_fixtures.h"
 #include "pipeline/deformation_error.h"
 

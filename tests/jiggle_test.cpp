@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/placement.h"
 #include "anatomy_fixture.h"
 #include "external_tools.h"

@@ -2,7 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 

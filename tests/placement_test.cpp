@@ -250,6 +250,24 @@ TEST_CASE("the right side is the exact mirror of the left") {
   }
 }
 
+TEST_CASE("a right-side locator mirrored out of reach is refused, though its left twin is within reach") {
+  test::Resolved r = test::resolveShipped(test::sampleGlbPath());
+  const double h = r.landmarks.body.height;
+  // A sagittal plane 50.2 body heights to the character's left of the scene's origin: the left locators
+  // (within a body height of the origin) stay within the 100 body heights a muscle may lie in, their
+  // mirror images land about 100.4 away.
+  r.landmarks.body.midline += 50.2 * h * r.landmarks.body.lateral;
+  CHECK_NOTHROW(placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kLeft));
+  try {
+    placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth);
+    FAIL("placed a mirrored locator out of reach");
+  } catch (const Error& error) {
+    CHECK(error.code() == "PRESET_INVALID");
+    CHECK(std::string(error.what()).find("places the mirrored origin of ") != std::string::npos);
+  }
+  CHECK_THROWS_AS(placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kRight), Error);
+}
+
 TEST_CASE("on the symmetric sample, placing the right side directly equals mirroring the left") {
   test::Resolved r = test::resolveShipped(test::sampleGlbPath());
   const MusclePreset& preset = test::gowPreset();

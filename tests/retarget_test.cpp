@@ -12,7 +12,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "formats/muscle_json.h"

@@ -19,7 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "cli_support.h"
 #include "external_tools.h"
 #include "formats/baked_gltf.h"

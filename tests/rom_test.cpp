@@ -8,7 +8,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "anatomy/sample_character.h"
 #include "anatomy_fixture.h"
 #include "external_tools.h"

@@ -9,7 +9,7 @@
 #include <numeric>
 #include <set>
 
-#include "anatomy/error.h"
+#include "core/error.h"
 #include "external_tools.h"
 #include "formats/gltf_document.h"
 #include "formats/gltf_write.h"
