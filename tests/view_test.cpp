@@ -626,4 +626,45 @@ TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) a
   checkAgreement("Quaternius Cyberpunk", path, "--influences 10 --jiggle biceps", {0.0, 0.31, 0.62, 0.9}, {0.47}, 1e-6);
 }
 
+// The plugin's README example, its lines run as written in a plain three.js page (ES modules from an
+// import map, served over http by player/test/plugin_example.mjs; Chromium refuses module pages from
+// file://): it loads a 10-influence bake with biceps jiggles, plays its first clip and moves the muscles.
+TEST_CASE("rigbake view: the rigbake-three plugin's README example plays a bake in a plain three.js page (Chromium)") {
+  if (!browserToolsPresent()) return;
+  if (!ext::requireTool(ext::onPath("emcc"), "emcc (Debian package emscripten)")) return;
+  TempDir dir;
+  const std::string baked = bakeForView(test::sampleGlbPathForCli(), "--influences 10 --jiggle biceps", dir / "baked.glb");
+  const std::string wasm_dir = test::sourceDir() + "/build/wasm";
+  REQUIRE(ext::runCommand("bash " + viewArg(test::sourceDir() + "/scripts/build-wasm.sh") + " " + viewArg(wasm_dir)).exit_code == 0);
+  // three as the player installed it (its pinned version, the plugin's peer dependency).
+  const std::string three = (std::filesystem::path(installedPlayer()).parent_path() / "node_modules" / "three").string();
+  const ext::CommandResult run = ext::runCommand("node " + viewArg(test::sourceDir() + "/player/test/plugin_example.mjs") + " " +
+                                                 viewArg(viewChromium()) + " " + viewArg(three) + " " + viewArg(wasm_dir) + " " +
+                                                 viewArg(baked) + " 120 2>&1");
+  INFO(run.output.substr(0, 4000));
+  REQUIRE(run.exit_code == 0);
+  std::string last;
+  std::istringstream lines(run.output);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("{", 0) == 0) last = line;
+  const nlohmann::json page = nlohmann::json::parse(last, nullptr, false);
+  REQUIRE(page.is_object());
+  CHECK_FALSE(page.value("timedOut", true));
+  CHECK(page["console"].empty());
+  CHECK(page["exceptions"].empty());
+  const nlohmann::json& result = page["result"];
+  REQUIRE(result.is_object());
+  CHECK(result["errors"].empty());
+  CHECK(result["lines"].get<int>() <= 10);
+  CHECK(result["muscles"] == 38);
+  CHECK(result["jiggles"] == 2);
+  CHECK(result["influences"] == nlohmann::json::array({10}));
+  CHECK(result["moved_m"].get<double>() > 1e-3);  // the muscles moved off their rest: the rig runs
+  CHECK(result["largest_jiggle_deg"].get<double>() > 0.01);
+  CHECK(result["glError"] == 0);
+  std::printf("plugin README example: %d lines, muscles moved up to %.4f m, largest jiggle %.2f deg, browser %.1f s\n",
+              result["lines"].get<int>(), result["moved_m"].get<double>(), result["largest_jiggle_deg"].get<double>(),
+              page.value("seconds", 0.0));
+}
+
 }  // namespace rigbake::view_test
