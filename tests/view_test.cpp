@@ -608,7 +608,7 @@ TEST_CASE("rigbake view: meshopt and Draco bakes from glTF-Transform with rigbak
 
 TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) and the GPU skinning match rigbake's C++ on the mannequin (Chromium)") {
   if (!browserToolsPresent()) return;
-  checkAgreement("mannequin", test::sampleGlbPathForCli(), "--influences 10 --helper-joints --jiggle biceps",
+  checkAgreement("mannequin", test::sampleGlbPathForCli(), "--influences 10 --helper-joints --jiggle gow_examples",
                  {0.0, 0.17, 0.41, 0.63, 0.88}, {0.29, 0.71}, 1e-6);
 }
 
