@@ -598,6 +598,14 @@ TEST_CASE("rigbake view: meshopt and Draco bakes from glTF-Transform with rigbak
     const bool draco = verb == "draco";
     CHECK(std::filesystem::exists(page + "/" + kViewDracoFile) == draco);
     CHECK((test::slurp(page + "/" + kViewPageFile).find(kViewDracoFile) != std::string::npos) == draco);
+    if (draco) {
+      // A bundle without the Draco decoder script beside it cannot make a Draco file's page.
+      const test::CliResult missing = test::runCli("view " + viewArg(compressed) + " -o " + viewArg(dir / "no-draco") + " --player " +
+                                                   viewArg(fakePlayer(dir)));
+      CHECK(missing.exit_code == 2);
+      CHECK(missing.err.rfind("VIEW_PLAYER_MISSING " + (dir / kViewDracoFile), 0) == 0);
+      CHECK_FALSE(std::filesystem::exists(dir / "no-draco"));
+    }
     const PageResult run = openPage(page + "/" + kViewPageFile, "?test=1", 180);
     checkCleanRun(run);
     checkClipsPlayed(run, 3);
