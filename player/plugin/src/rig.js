@@ -150,7 +150,11 @@ export class RigbakeRig {
   }
 
   updateJiggles(dt) {
-    if (!this.jigglesEnabled) return;
+    if (!this.jigglesEnabled) {
+      // Switched off: they start again at rest when switched back on, not from a stale state.
+      this.needsReset = true;
+      return;
+    }
     this.rig.storeSkinned();
     if (this.needsReset) {
       this.rig.jiggleReset();
