@@ -1,7 +1,7 @@
 // `rigbake view baked.glb -o DIR`: a page that plays a baked character in the browser with the rigbake
-// player (player/, docs/view.md): the muscles evaluated live by the runtime's equations in JavaScript,
-// 4, 7 or 10 influences skinned from the packed attributes, the heatmap and the jiggles' hit button.
-// Works from file:// with no server and no network.
+// player (player/, docs/view.md): the muscles and jiggles evaluated live by the runtime compiled to
+// WebAssembly (the rigbake-three plugin), 4, 7 or 10 influences skinned from the packed attributes, the
+// heatmap and the jiggles' hit button. Works from file:// with no server and no network.
 
 #include <cstdlib>
 #include <filesystem>
@@ -49,6 +49,23 @@ std::string readPlayerBundle(const std::string& path) {
   return bundle;
 }
 
+// Three's Draco decoder files as one script (scripts/install-player.sh writes it beside the bundle), for a
+// Draco-compressed file's page.
+std::string readDracoScript(const std::string& player_path) {
+  const std::string path = (std::filesystem::path(player_path).parent_path() / kViewDracoFile).string();
+  std::string script;
+  try {
+    script = readFile(path);
+  } catch (const Error&) {
+    fail(errc::VIEW_PLAYER_MISSING, path,
+         "the Draco decoder script a KHR_draco_mesh_compression file's page needs is not beside the player bundle: run "
+         "scripts/install-player.sh");
+  }
+  if (script.find("RIGBAKE_DRACO") == std::string::npos)
+    fail(errc::VIEW_PLAYER_MISSING, path, "is not the player's Draco decoder script (no RIGBAKE_DRACO in it): run scripts/install-player.sh");
+  return script;
+}
+
 // What would break the player: a malformed rig extension, packed attributes that do not decode.
 void checkViewable(const std::string& path, const BakedFileData& file) {
   if (!file.rig.problems.empty()) {
@@ -81,9 +98,11 @@ int run(const ViewCommandOptions& options) {
   LoadedCharacter loaded = loadCharacter(options.baked);
   const BakedFileData file = readBakedFileData(loaded);
   checkViewable(options.baked, file);
-  // A GLB (or VRM) goes in byte for byte; a .gltf with its buffers and images beside it becomes one GLB.
+  // A GLB (or VRM) goes in byte for byte, compressed or not (the page decodes meshopt and Draco); a .gltf
+  // with its buffers and images beside it becomes one GLB.
   const std::string glb = glbOf(options.baked, *loaded.document);
-  const auto files = viewPageFiles(fileNameOf(options.baked), glb, bundle);
+  const std::string draco = glbUsesExtension(glb, "KHR_draco_mesh_compression") ? readDracoScript(player_path) : std::string();
+  const auto files = viewPageFiles(fileNameOf(options.baked), glb, bundle, draco);
   writeViewDirectory(options.output, files);
 
   long long page_bytes = 0;
@@ -118,12 +137,14 @@ void addViewCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand(
       "view",
       "Write a page that plays a baked character in the browser (three.js, WebGL 2), from file:// with no server and "
-      "no network: every clip (a selector), the muscles evaluated live from the skeleton by the RIGBAKE_muscle_rig "
-      "equations in JavaScript (runtime), played from the file's channels (sampled) or left at rest (off: the input's "
+      "no network: every clip (a selector), the RIGBAKE_muscle_rig muscles and jiggles evaluated live from the skeleton "
+      "by rigbake's runtime compiled to WebAssembly (runtime), played from the file's channels (sampled) or left at rest (off: the input's "
       "own skinning), 4 influences (three.js's own skinning of JOINTS_0/WEIGHTS_0) or 7 / 10 from the packed 0.001 "
       "weights in the player's shader, a heatmap of how far the muscles move the skin against plain skinning, and a "
-      "Hit button that kicks the live jiggles. DIR gets index.html, rigbake-player.js (the player and three.js in one "
-      "script, built by scripts/install-player.sh) and model.js (the GLB as base64); open DIR/index.html. The same "
+      "Hit button that kicks the live jiggles. DIR gets index.html, rigbake-player.js (the player, the rigbake-three "
+      "plugin, the WebAssembly runtime and three.js in one script, built by scripts/install-player.sh) and model.js "
+      "(the GLB as base64; meshopt- and Draco-compressed files play, a Draco file's page gets rigbake-draco.js, the "
+      "decoder); open DIR/index.html. The same "
       "input gives the same bytes. docs/view.md says what the page shows.\n\n"
       "Example:\n"
       "  rigbake bake hero.glb --influences 10 --muscle-motion both --jiggle biceps -o baked.glb\n"

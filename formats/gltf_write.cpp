@@ -334,25 +334,17 @@ std::string assembleGlb(const StandAlone& layout) {
 
 bool isBinaryGltfPath(const std::string& path) { return endsWith(path, ".glb") || endsWith(path, ".vrm"); }
 
-namespace {
-
-// True when a GLB's JSON chunk names a compression extension (formats/gltf_decompress.h decodes both
-// on load, so the loaded document holds plain accessors).
-bool glbUsesCompression(const std::string& glb) {
+bool glbUsesExtension(const std::string& glb, const std::string& extension) {
   if (glb.size() < 20) return false;
   std::uint32_t json_length = 0;
   std::memcpy(&json_length, glb.data() + 12, 4);
   const std::string json = glb.substr(20, std::min<size_t>(json_length, glb.size() - 20));
-  return json.find("\"EXT_meshopt_compression\"") != std::string::npos ||
-         json.find("\"KHR_draco_mesh_compression\"") != std::string::npos;
+  return json.find("\"" + extension + "\"") != std::string::npos;
 }
-
-}  // namespace
 
 std::string glbOf(const std::string& path, const GltfDocument& document) {
   if (!isBinaryGltfPath(path)) return serializeGltf(modelOf(document), true);
-  std::string glb = readFile(path);
-  return glbUsesCompression(glb) ? serializeGltf(modelOf(document), true) : glb;
+  return readFile(path);
 }
 
 std::string serializeGltf(tinygltf::Model model, bool binary) {

@@ -29,10 +29,12 @@ void writeGltf(tinygltf::Model model, const std::string& path);
 // True for paths that writeGltf writes as GLB.
 bool isBinaryGltfPath(const std::string& path);
 
-// A loaded file as one GLB: the file's own bytes when `path` is a GLB or VRM, else the document
-// serialized (a .gltf with its buffers and images beside it becomes one self-contained GLB). A GLB that
-// uses EXT_meshopt_compression or KHR_draco_mesh_compression is the decoded document serialized too,
-// so that whoever reads the result (the `rigbake view` page) needs no decoder.
+// A loaded file as one GLB: the file's own bytes when `path` is a GLB or VRM (compressed or not: the
+// `rigbake view` page decodes EXT_meshopt_compression and KHR_draco_mesh_compression itself), else the
+// document serialized (a .gltf with its buffers and images beside it becomes one self-contained GLB).
 std::string glbOf(const std::string& path, const GltfDocument& document);
+
+// True when the GLB's JSON chunk names `extension` (e.g. in extensionsUsed).
+bool glbUsesExtension(const std::string& glb, const std::string& extension);
 
 }  // namespace rigbake

@@ -71,7 +71,7 @@ const char* kViewPageStyle = R"css(
 
 }  // namespace
 
-std::string viewPageHtml(const std::string& title) {
+std::string viewPageHtml(const std::string& title, bool with_draco) {
   std::string html;
   html += "<!doctype html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   html += "<meta name=\"generator\" content=\"" + std::string(kViewGenerator) + "\">\n";
@@ -82,6 +82,7 @@ std::string viewPageHtml(const std::string& title) {
   html += "<noscript><p>The rigbake player needs JavaScript and WebGL 2.</p></noscript>\n";
   // Classic scripts only: file:// pages may not import modules or fetch() in Chromium (docs/view.md).
   html += "<script src=\"" + std::string(kViewModelFile) + "\"></script>\n";
+  if (with_draco) html += "<script src=\"" + std::string(kViewDracoFile) + "\"></script>\n";
   html += "<script src=\"" + std::string(kViewPlayerFile) + "\"></script>\n";
   html += "<script>RigbakePlayer.startPage(document.getElementById(\"rigbake-player\"), {title: " + scriptString(title) +
           "});</script>\n";
@@ -95,8 +96,12 @@ std::string viewModelScript(const std::string& glb) {
 }
 
 std::map<std::string, std::string> viewPageFiles(const std::string& title, const std::string& glb,
-                                                 const std::string& player_bundle) {
-  return {{kViewPageFile, viewPageHtml(title)}, {kViewPlayerFile, player_bundle}, {kViewModelFile, viewModelScript(glb)}};
+                                                 const std::string& player_bundle, const std::string& draco_script) {
+  std::map<std::string, std::string> files = {{kViewPageFile, viewPageHtml(title, !draco_script.empty())},
+                                              {kViewPlayerFile, player_bundle},
+                                              {kViewModelFile, viewModelScript(glb)}};
+  if (!draco_script.empty()) files[kViewDracoFile] = draco_script;
+  return files;
 }
 
 void writeViewDirectory(const std::string& dir, const std::map<std::string, std::string>& files) {
@@ -111,7 +116,8 @@ void writeViewDirectory(const std::string& dir, const std::map<std::string, std:
     if (!fs::is_directory(target, error)) fail(errc::IO_WRITE_FAILED, dir, "exists and is not a directory");
     for (const fs::directory_entry& entry : fs::directory_iterator(target, error)) {
       const std::string name = entry.path().filename().string();
-      if (!files.count(name) || !entry.is_regular_file())
+      const bool ours = files.count(name) || name == kViewDracoFile;  // a page for a Draco file had it
+      if (!ours || !entry.is_regular_file())
         fail(errc::IO_WRITE_FAILED, dir,
              "exists and holds '" + name + "', which rigbake view did not write: remove the directory or choose another -o");
     }

@@ -5,6 +5,10 @@
 
 import { RigbakePlayer, MUSCLE_MODES, INFLUENCE_COUNTS } from './player.js';
 import { installErrorCapture, runSelfTest } from './self_test.js';
+import { loadRigbakeRuntime } from '../../runtime/js/rigbake_runtime.mjs';
+// The WebAssembly runtime's bytes, bundled into the player script (esbuild's binary loader,
+// scripts/install-player.sh): a file:// page cannot fetch the .wasm beside it.
+import runtimeWasm from 'rigbake-runtime-wasm';
 
 const HEAT_SCALES = [
   [0.005, '5 mm'],
@@ -121,7 +125,11 @@ export async function startPage(root, options = {}) {
   panel.appendChild(status);
   try {
     if (typeof window.RIGBAKE_MODEL !== 'string') throw new Error('model.js did not load: the page needs the model.js file written beside it');
-    const player = new RigbakePlayer(viewport, test ? { width: 320, height: 240, preserveDrawingBuffer: true } : {});
+    const runtime = await loadRigbakeRuntime(runtimeWasm);
+    // Draco's decoder files come as a script of their own beside a Draco file's page (rigbake-draco.js).
+    const draco = window.RIGBAKE_DRACO ? { wrapper: window.RIGBAKE_DRACO.wrapper, wasm: decodeBase64(window.RIGBAKE_DRACO.wasm) } : null;
+    const size = test ? { width: 320, height: 240, preserveDrawingBuffer: true } : {};
+    const player = new RigbakePlayer(viewport, { runtime, draco, ...size });
     window.rigbakePlayer = player;
     await player.load(decodeBase64(window.RIGBAKE_MODEL));
     status.remove();

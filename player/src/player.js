@@ -1,32 +1,34 @@
-// The rigbake player: loads a baked glTF with three.js, evaluates its RIGBAKE_muscle_rig muscles and
-// jiggles every frame with the runtime's equations (muscle_rig.js, jiggle.js) and skins 4, 7 or 10
-// influences (skinning.js). docs/view.md describes what it shows; `rigbake view` writes a page that
-// runs it from file:// (page.js).
+// The rigbake player: loads a baked glTF with three.js and the rigbake-three plugin (player/plugin/),
+// which evaluates its RIGBAKE_muscle_rig muscles and jiggles every frame with the WebAssembly runtime
+// and skins 7 or 10 packed influences; the player adds the modes a rigger compares (muscles sampled or
+// at rest, 4 influences, the heatmap). docs/view.md describes what it shows; `rigbake view` writes a page
+// that runs it from file:// (page.js).
 
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/examples/jsm/loaders/GLTFLoader.js';
+import { DRACOLoader } from 'three/examples/jsm/loaders/DRACOLoader.js';
+import { MeshoptDecoder } from 'three/examples/jsm/libs/meshopt_decoder.module.js';
 import { OrbitControls } from 'three/examples/jsm/controls/OrbitControls.js';
-import { evaluateMuscle, readMuscleRig, rotationOf } from './muscle_rig.js';
-import { LiveJiggle } from './jiggle.js';
-import { makeBoneTexture, patchSkinningMaterial, preparePackedAttributes } from './skinning.js';
+import { RigbakeMuscleRigPlugin, applySkinningState, nodeObjects } from '../plugin/src/index.js';
 
 export const MUSCLE_MODES = ['runtime', 'sampled', 'off'];
 export const INFLUENCE_COUNTS = [4, 7, 10];
 
 const _matrix = new THREE.Matrix4();
-const _position = new THREE.Vector3();
-const _quaternion = new THREE.Quaternion();
-const _rotation = new THREE.Quaternion();
-const _scale = new THREE.Vector3();
 
-// The glTF node index of every object GLTFLoader made for a node.
-function nodeObjects(gltf) {
-  const nodes = [];
-  gltf.scene.traverse((object) => {
-    const association = gltf.parser.associations.get(object);
-    if (association && association.nodes !== undefined) nodes[association.nodes] = object;
-  });
-  return nodes;
+// Draco's decoder, given as its two files' contents (window.RIGBAKE_DRACO, rigbake-draco.js, which
+// `rigbake view` writes beside a Draco file's page): a file:// page cannot fetch them, so the loader is
+// handed them instead of loading them from a path.
+class EmbeddedDracoLoader extends DRACOLoader {
+  constructor(files) {
+    super();
+    this.files = files;
+  }
+  _loadLibrary(url) {
+    if (url.endsWith('draco_wasm_wrapper.js')) return Promise.resolve(this.files.wrapper);
+    if (url.endsWith('draco_decoder.wasm')) return Promise.resolve(this.files.wasm.slice(0));
+    return Promise.reject(new Error(`the Draco decoder file ${url} is not embedded`));
+  }
 }
 
 // Where a skinned mesh came from: {node, mesh, primitive} of the glTF.
@@ -37,8 +39,9 @@ function meshSource(gltf, mesh) {
 }
 
 export class RigbakePlayer {
-  // container: the element the canvas goes in. options: {width, height} for a fixed size (tests),
-  // preserveDrawingBuffer (tests read pixels back).
+  // container: the element the canvas goes in. options: runtime (loadRigbakeRuntime()'s, required),
+  // draco ({wrapper, wasm}: Draco's decoder files, for Draco-compressed files), {width, height} for a
+  // fixed size (tests), preserveDrawingBuffer (tests read pixels back).
   constructor(container, options = {}) {
     this.container = container;
     this.options = options;
@@ -69,21 +72,23 @@ export class RigbakePlayer {
   // ---- loading ----
 
   async load(arrayBuffer) {
-    const gltf = await new GLTFLoader().parseAsync(arrayBuffer, '');
+    const loader = new GLTFLoader().register((parser) => new RigbakeMuscleRigPlugin(parser, this.options.runtime));
+    loader.setMeshoptDecoder(MeshoptDecoder);
+    if (this.options.draco) loader.setDRACOLoader(new EmbeddedDracoLoader(this.options.draco));
+    const gltf = await loader.parseAsync(arrayBuffer, '');
     this.gltf = gltf;
     this.json = gltf.parser.json;
     this.root = gltf.scene;
     this.scene.add(this.root);
     this.nodes = nodeObjects(gltf);
-    const { rig, problems } = readMuscleRig(this.json);
-    if (problems.length) throw new Error(`RIGBAKE_muscle_rig is malformed: ${problems.slice(0, 5).join('; ')}`);
-    this.rig = rig;
+    this.rig = gltf.userData.rigbake; // the plugin's RigbakeRig, null without the extension
     this.findMuscleNodes();
     this.prepareMeshes();
     this.prepareClips();
     this.prepareJiggles();
     this.influences = this.fileInfluences;
     this.muscleMode = this.rig ? 'runtime' : this.hasSampledMuscles ? 'sampled' : 'off';
+    for (const entry of this.muscles) entry.node.matrixAutoUpdate = this.muscleMode === 'sampled';
     this.applyMaterialState();
     this.selectClip(0);
     this.frame();
@@ -95,26 +100,21 @@ export class RigbakePlayer {
   findMuscleNodes() {
     this.muscles = [];
     if (this.rig) {
-      for (const muscle of this.rig.muscles) {
-        this.muscles.push({
-          muscle,
-          name: muscle.name,
-          node: this.nodes[muscle.skinnedNode],
-          carrier: this.nodes[muscle.carrierNode],
-          helpers: muscle.helperNodes.map((index) => this.nodes[index]),
-          rest: muscle.skinnedInCarrier,
-        });
-      }
+      // Muscles off puts each joint at rest on its carrier: the extension's skinnedInCarrier (K).
+      const stored = this.json.extensions.RIGBAKE_muscle_rig.muscles;
+      this.rig.muscles.forEach((muscle, m) => {
+        this.muscles.push({ name: muscle.name, node: muscle.node, carrier: muscle.carrier, helpers: muscle.helpers.filter(Boolean), rest: stored[m].skinnedInCarrier.slice() });
+      });
     } else {
       (this.json.nodes || []).forEach((node, index) => {
         const info = node.extras && node.extras.rigbake;
         if (!info || info.role !== 'skinned' || !this.nodes[index]) return;
         const object = this.nodes[index];
-        this.muscles.push({ muscle: null, name: info.muscle, node: object, carrier: object.parent, helpers: [], rest: null });
+        this.muscles.push({ name: info.muscle, node: object, carrier: object.parent, helpers: [], rest: null });
       });
     }
     const skinnedNodes = new Set();
-    (this.rig ? this.rig.muscles : []).forEach((m) => skinnedNodes.add(m.skinnedNode));
+    (this.rig ? this.rig.muscles : []).forEach((m) => m.node && skinnedNodes.add(this.nodes.indexOf(m.node)));
     (this.json.nodes || []).forEach((node, index) => {
       if (node.extras && node.extras.rigbake && node.extras.rigbake.role === 'skinned') skinnedNodes.add(index);
     });
@@ -129,20 +129,11 @@ export class RigbakePlayer {
     this.hasPacked = false;
     this.root.traverse((object) => {
       if (!object.isSkinnedMesh) return;
-      object.frustumCulled = false;
-      const layout = preparePackedAttributes(object.geometry);
-      const state = {
-        mesh: object,
-        source: meshSource(this.gltf, object),
-        layout,
-        fileInfluences: layout ? layout.influences : 0,
-        influences: 4,
-        heatmap: false,
-        plainTexture: makeBoneTexture(object.skeleton),
-        uniforms: { rbPlainBones: { value: null }, rbHeatScale: { value: this.heatScale } },
-      };
-      state.uniforms.rbPlainBones.value = state.plainTexture;
-      object.material = Array.isArray(object.material) ? object.material.map((m) => m.clone()) : object.material.clone();
+      // The plugin prepared the packed skinning (and the plain-skinning texture the heatmap reads).
+      const state = object.userData.rigbakeSkinning;
+      state.mesh = object;
+      state.source = meshSource(this.gltf, object);
+      const layout = state.layout;
       if (layout) {
         this.hasPacked = true;
         this.fileInfluences = Math.max(this.fileInfluences, layout.influences);
@@ -177,11 +168,7 @@ export class RigbakePlayer {
   }
 
   prepareJiggles() {
-    this.jiggles = (this.rig ? this.rig.jiggles : []).map((setup) => {
-      const node = this.nodes[setup.node];
-      const muscle = this.muscles.find((m) => m.node === node) || null;
-      return { setup, live: new LiveJiggle(setup), node, root: this.nodes[setup.rootNode], muscle, animated: null };
-    });
+    this.jiggles = this.rig ? this.rig.jiggles : [];
   }
 
   // ---- state ----
@@ -204,6 +191,7 @@ export class RigbakePlayer {
   setMuscleMode(mode) {
     if (!this.availableMuscleModes().includes(mode)) throw new Error(`muscles ${mode} is not available for this file`);
     this.muscleMode = mode;
+    if (this.rig && mode !== 'runtime') this.rig.deactivate();
     for (const entry of this.muscles) {
       entry.node.matrixAutoUpdate = mode === 'sampled';
       for (const helper of entry.helpers) if (helper) helper.matrixAutoUpdate = mode === 'sampled';
@@ -232,13 +220,9 @@ export class RigbakePlayer {
     for (const state of this.skinnedMeshes) {
       const influences = state.fileInfluences ? Math.min(this.influences, state.fileInfluences) : 4;
       state.uniforms.rbHeatScale.value = this.heatScale;
-      if (state.influences === influences && state.heatmap === this.heatmap && state.patched) continue;
       state.influences = influences;
       state.heatmap = this.heatmap;
-      state.patched = true;
-      for (const material of Array.isArray(state.mesh.material) ? state.mesh.material : [state.mesh.material]) {
-        patchSkinningMaterial(material, state);
-      }
+      applySkinningState(state.mesh);
     }
   }
 
@@ -248,6 +232,7 @@ export class RigbakePlayer {
     this.mixer.stopAllAction();
     const clip = this.clips[index];
     clip.action.reset().setLoop(THREE.LoopRepeat, Infinity).play();
+    if (this.rig) this.rig.playedFromClip = clip.bakedJiggles;
     this.time = 0;
     this.mixer.setTime(0);
     this.resetJiggles();
@@ -256,15 +241,14 @@ export class RigbakePlayer {
   }
 
   resetJiggles() {
-    for (const jiggle of this.jiggles) jiggle.live.reset();
+    if (this.rig) this.rig.resetJiggles();
   }
 
   // A hit (docs/jiggle.md "Combat Reaction"): every jiggle point gets `speed` m/s along `direction`
   // (world; default: away from the camera, as if struck from where the viewer stands).
   hit(direction = null, speed = 1.5) {
     const d = direction ? new THREE.Vector3(...direction) : new THREE.Vector3().subVectors(this.controls.target, this.camera.position);
-    d.normalize().multiplyScalar(speed);
-    for (const jiggle of this.jiggles) jiggle.live.hit([d.x, d.y, d.z]);
+    if (this.rig) this.rig.hit(d.normalize(), speed);
   }
 
   // ---- the frame ----
@@ -272,9 +256,6 @@ export class RigbakePlayer {
   // Advances the clip by dt seconds and evaluates everything for the new time.
   advance(dt) {
     if (!this.clips.length) return this.frame(dt);
-    // Jiggled joints are given back their animated transforms before the mixer runs, so that a joint
-    // the clip does not animate does not accumulate the jiggle frame after frame.
-    this.restoreAnimated();
     this.mixer.update(dt);
     this.time = this.clips[this.clipIndex].action.time;
     this.frame(dt);
@@ -282,97 +263,38 @@ export class RigbakePlayer {
 
   // Puts the clip at `time` seconds, as the test does; jiggles start again from rest.
   seek(time) {
-    this.restoreAnimated();
     this.mixer.setTime(time);
     this.time = time;
     this.resetJiggles();
     this.frame(0);
   }
 
-  restoreAnimated() {
-    for (const jiggle of this.jiggles) {
-      if (!jiggle.animated || jiggle.muscle) continue;
-      jiggle.node.position.copy(jiggle.animated.position);
-      jiggle.node.quaternion.copy(jiggle.animated.quaternion);
-      jiggle.node.scale.copy(jiggle.animated.scale);
-    }
-  }
-
-  // Everything after the skeleton is posed: muscles, jiggles, plain-skinning matrices.
+  // Everything after the skeleton is posed: muscles and jiggles (the plugin's rig), plain-skinning matrices.
   frame(dt = 0) {
-    for (const jiggle of this.jiggles) {
-      if (jiggle.muscle) continue;
-      jiggle.animated = { position: jiggle.node.position.clone(), quaternion: jiggle.node.quaternion.clone(), scale: jiggle.node.scale.clone() };
+    if (this.muscleMode === 'runtime' && this.rig) {
+      this.rig.jigglesEnabled = this.jigglesEnabled;
+      this.rig.update(dt);
+    } else {
+      this.root.updateMatrixWorld(true);
+      if (this.muscleMode === 'off') this.restMuscles();
     }
-    this.root.updateMatrixWorld(true);
-    if (this.muscleMode !== 'sampled') this.applyMuscles();
-    if (this.muscleMode === 'runtime' && this.jigglesEnabled && this.jiggles.length) this.applyJiggles(dt);
-    this.root.updateMatrixWorld(true);
     if (this.heatmap) this.updatePlainBones();
   }
 
-  // The skeleton's model-space matrices as the runtime reads them: node index -> 16 numbers.
-  jointMatrix(index) {
-    return this.nodes[index].matrixWorld.elements;
-  }
-
-  // Evaluates every muscle (runtime) or puts it at rest (off), and sets its node's local matrix.
-  applyMuscles() {
-    const joints = new Proxy([], { get: (_, key) => this.jointMatrix(Number(key)) });
-    this.lastEvaluation = [];
+  // Muscles off: every muscle joint at rest on its carrier (K), the input's own skinning.
+  restMuscles() {
     for (const entry of this.muscles) {
-      let local = entry.rest;
-      if (this.muscleMode === 'runtime' && entry.muscle) {
-        const result = evaluateMuscle(entry.muscle, joints, entry.helpers.length > 0);
-        this.lastEvaluation.push(result);
-        local = result.local;
-        if (result.helpers) this.setWorld(entry.helpers, result.helpers);
-      }
-      if (!local) continue;
+      if (!entry.rest || !entry.carrier) continue;
       if (entry.node.parent === entry.carrier) {
-        entry.node.matrix.fromArray(local);
+        entry.node.matrix.fromArray(entry.rest);
       } else {
-        // Not a child of its carrier (a file edited by hand): local = parent^-1 * carrier * K T S.
-        _matrix.fromArray(local).premultiply(entry.carrier.matrixWorld);
+        // Not a child of its carrier (a file edited by hand): local = parent^-1 * carrier * K.
+        _matrix.fromArray(entry.rest).premultiply(entry.carrier.matrixWorld);
         entry.node.matrix.copy(entry.node.parent.matrixWorld).invert().multiply(_matrix);
       }
       // Only the matrix: position, quaternion and scale stay the mixer's (three's PropertyMixer writes
       // a value only when it changed, so overwriting them here would leave sampled mode showing these).
       entry.node.updateMatrixWorld(true);
-    }
-  }
-
-  setWorld(objects, frames) {
-    objects.forEach((object, k) => {
-      if (!object) return;
-      _matrix.fromArray(frames.slice(16 * k, 16 * k + 16));
-      object.matrix.copy(object.parent.matrixWorld).invert().multiply(_matrix);
-      object.updateMatrixWorld(true);
-    });
-  }
-
-  applyJiggles(dt) {
-    const baked = this.clips.length ? this.clips[this.clipIndex].bakedJiggles : new Set();
-    for (const jiggle of this.jiggles) {
-      if (!jiggle.node || !jiggle.root || baked.has(jiggle.setup.name)) continue;
-      const world = jiggle.node.matrixWorld.elements;
-      const pivotRotation = rotationOf(world);
-      const frame = { translation: [world[12], world[13], world[14]], rotation: pivotRotation };
-      const offset = jiggle.live.advance(frame, dt);
-      const rootRotation = rotationOf(jiggle.root.matrixWorld.elements);
-      const d = jiggle.live.rotationFor(offset, pivotRotation, rootRotation);
-      jiggle.lastOffset = offset;
-      _quaternion.set(d[0], d[1], d[2], d[3]);
-      if (jiggle.muscle) {
-        // R_baked = R_animated * D on the muscle joint's local T R S.
-        jiggle.node.matrix.decompose(_position, _rotation, _scale);
-        _rotation.multiply(_quaternion);
-        jiggle.node.matrix.compose(_position, _rotation, _scale);
-      } else {
-        jiggle.node.quaternion.multiply(_quaternion);
-        jiggle.node.updateMatrix();
-      }
-      jiggle.node.updateMatrixWorld(true);
     }
   }
 

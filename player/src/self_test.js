@@ -1,11 +1,12 @@
 // The page's self-test (index.html?test=1), for tests/view_test.cpp in headless Chromium. It drives
 // the page through its own controls, plays every clip, tries every muscle mode, influence count and
 // the heatmap, kicks the jiggles, and, when the test handed it a reference (window.RIGBAKE_REFERENCE,
-// computed by rigbake's C++ runtime and skinning), compares the JavaScript runtime's muscle matrices
-// and the GPU-skinned positions with it. The result is JSON in <pre id="rigbake-test-result">.
+// computed by rigbake's C++ runtime and skinning), compares the muscle matrices the plugin set (the
+// WebAssembly runtime's) and the GPU-skinned positions with it. The result is JSON in <pre id="rigbake-test-result">.
 
+import * as THREE from 'three';
 import { INFLUENCE_COUNTS } from './player.js';
-import { readBackSkinning } from './skinning.js';
+import { readBackSkinning } from '../plugin/src/index.js';
 
 const captured = { errors: [], warnings: [] };
 
@@ -27,6 +28,13 @@ function decodeFloat64(base64) {
   const bytes = new Uint8Array(binary.length);
   for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
   return new Float64Array(bytes.buffer);
+}
+
+function decodeFloat32(base64) {
+  const binary = atob(base64);
+  const bytes = new Uint8Array(binary.length);
+  for (let i = 0; i < binary.length; ++i) bytes[i] = binary.charCodeAt(i);
+  return new Float32Array(bytes.buffer);
 }
 
 const click = (id) => document.getElementById(id).click();
@@ -109,7 +117,8 @@ function hitTest(player) {
   click('rb-muscles-runtime');
   choose('rb-clip', 0);
   player.playing = false;
-  const magnitude = () => Math.max(...player.jiggles.map((j) => (j.lastOffset ? Math.hypot(...j.lastOffset) : 0)));
+  // The largest jiggle correction's angle (degrees): how far the jiggle swings its joint.
+  const magnitude = () => Math.max(...player.jiggles.map((j) => (j.angle * 180) / Math.PI));
   for (let f = 0; f < 10; ++f) player.advance(1 / 60);
   const before = magnitude();
   click('rb-hit');
@@ -125,7 +134,16 @@ function hitTest(player) {
     player.mixer.setTime(time);
     player.frame(1 / 60);
   }
-  return { jiggles: player.jiggles.length, before_m: before, peak_m: peak, settled_m: magnitude(), glError: glError(player) };
+  return { jiggles: player.jiggles.length, before_deg: before, peak_deg: peak, settled_deg: magnitude(), glError: glError(player) };
+}
+
+// The size of a matrix's 3x3 part (its largest column length): rotation/scale terms are compared
+// relative to it, so that an armature scaled x100 (3x3 terms near 100) is held to the same float
+// precision as one in metres. A relative term difference e moves a point at distance d by e * d.
+function linearScale(values, at = 0) {
+  let scale = 0;
+  for (let c = 0; c < 3; ++c) scale = Math.max(scale, Math.hypot(values[at + 4 * c], values[at + 4 * c + 1], values[at + 4 * c + 2]));
+  return scale > 0 ? scale : 1;
 }
 
 function angleDifference(a, b) {
@@ -135,38 +153,118 @@ function angleDifference(a, b) {
   return Math.abs(d);
 }
 
-// The JavaScript runtime against the C++ runtime's matrices at the reference's times.
+// The plugin against the C++ runtime's matrices at the reference's times: the skinned joints' world
+// matrices as the scene holds them after the plugin set them, and the runtime's drivers and helpers.
 function compareMatrices(player, reference) {
   const out = { frames: 0, muscles: player.muscles.length, translation_m: 0, linear: 0, ratio: 0, twist_rad: 0, helpers_m: 0, helpers_compared: 0, worst: '' };
   player.setMuscleMode('runtime');
   player.jigglesEnabled = false;
+  player.rig.record = true;
+  const withHelpers = player.rig.hasHelpers;
   for (const clip of reference.clips) {
     player.selectClip(clip.animation);
     clip.times.forEach((time, i) => {
       player.seek(time);
-      const evaluation = player.lastEvaluation;
-      if (evaluation.length * 16 !== clip.skinned[i].length) throw new Error(`reference has ${clip.skinned[i].length / 16} muscles, the page ${evaluation.length}`);
-      evaluation.forEach((result, m) => {
-        const cpp = clip.skinned[i];
+      const cpp = clip.skinned[i];
+      if (player.muscles.length * 16 !== cpp.length) throw new Error(`reference has ${cpp.length / 16} muscles, the page ${player.muscles.length}`);
+      player.muscles.forEach((entry, m) => {
+        const scene = entry.node.matrixWorld.elements;
+        const size = linearScale(cpp, 16 * m);
         for (let k = 0; k < 16; ++k) {
-          const d = Math.abs(result.skinned[k] - cpp[16 * m + k]);
+          const d = Math.abs(scene[k] - cpp[16 * m + k]) / (k >= 12 ? 1 : size);
           const key = k >= 12 ? 'translation_m' : 'linear';
           if (d > out[key]) {
             out[key] = d;
-            if (d > 1e-9) out.worst = `${clip.name} t=${time} ${player.muscles[m].name} element ${k}: ${result.skinned[k]} vs ${cpp[16 * m + k]}`;
+            if (d > 1e-9) out.worst = `${clip.name} t=${time} ${entry.name} element ${k}: ${scene[k]} vs ${cpp[16 * m + k]}`;
           }
         }
-        out.ratio = Math.max(out.ratio, Math.abs(result.drivers.ratio - clip.drivers[i][2 * m]));
-        out.twist_rad = Math.max(out.twist_rad, angleDifference(result.drivers.twist, clip.drivers[i][2 * m + 1]));
-        if (clip.helpers && result.helpers) {
-          for (let k = 0; k < 48; ++k) out.helpers_m = Math.max(out.helpers_m, Math.abs(result.helpers[k] - clip.helpers[i][48 * m + k]));
+        out.ratio = Math.max(out.ratio, Math.abs(player.rig.lastDrivers[3 * m] - clip.drivers[i][2 * m]));
+        out.twist_rad = Math.max(out.twist_rad, angleDifference(player.rig.lastDrivers[3 * m + 2], clip.drivers[i][2 * m + 1]));
+        if (clip.helpers && withHelpers) {
+          // The helper nodes' world matrices as the scene holds them.
+          player.rig.muscles[m].helpers.forEach((helper, h) => {
+            if (!helper) return;
+            const values = helper.matrixWorld.elements;
+            for (let k = 0; k < 16; ++k) out.helpers_m = Math.max(out.helpers_m, Math.abs(values[k] - clip.helpers[i][48 * m + 16 * h + k]));
+          });
           ++out.helpers_compared;
         }
       });
       ++out.frames;
     });
   }
+  player.rig.record = false;
   player.jigglesEnabled = true;
+  return out;
+}
+
+// The plugin against the native C API, frame by frame (reference.capi, written by tests/view_test.cpp as
+// tests/runtime_c_api_test.cpp runs the C API): the scene is set to each frame's node world matrices, the
+// plugin's update runs (muscles, then the jiggles stepped by dt, a hit at hitFrame), and the muscle and
+// jiggling joints' world matrices the scene then holds, and the jiggle corrections, are compared with
+// the native library's.
+function compareCapiFrames(player, data) {
+  const out = { frames: 0, muscles: 0, jiggles: 0, muscle_m: 0, muscle_terms: 0, jiggle_m: 0, jiggle_terms: 0, correction: 0, largest_jiggle_deg: 0, worst: '' };
+  const poses = decodeFloat32(data.poses);
+  const expected = decodeFloat32(data.expected);
+  const rig = player.rig;
+  player.setMuscleMode('runtime');
+  player.mixer.stopAllAction();
+  rig.playedFromClip = new Set();
+  rig.jigglesEnabled = true;
+  rig.record = true;
+  rig.resetJiggles();
+  // Parents first, so that each node's local matrix is taken under its parent's new world matrix.
+  const depth = (object) => (object.parent ? depth(object.parent) + 1 : 0);
+  const order = data.nodes.map((n) => player.nodes[n]).sort((a, b) => depth(a) - depth(b));
+  const index = new Map(data.nodes.map((n) => [player.nodes[n], n]));
+  const nodeFloats = 16 * data.nodeCount;
+  const perFrame = 16 * data.muscles + 4 * data.jiggles + 16 * data.jiggles;
+  const frames = poses.length / nodeFloats;
+  if (frames * perFrame !== expected.length) throw new Error(`capi: ${frames} poses, ${expected.length / perFrame} expected frames`);
+  const jiggling = new Set(rig.jiggles.map((j) => j.node));
+  const world = new THREE.Matrix4();
+  const local = new THREE.Matrix4();
+  const compare = (values, at, expectedAt, translationKey, termsKey, label) => {
+    const size = linearScale(expected, expectedAt);
+    for (let k = 0; k < 16; ++k) {
+      const d = Math.abs(values[k] - expected[expectedAt + k]) / (k >= 12 ? 1 : size);
+      const key = k >= 12 ? translationKey : termsKey;
+      if (d > out[key]) {
+        out[key] = d;
+        if (d > 1e-6) out.worst = `${label} element ${k}: ${values[k]} vs ${expected[expectedAt + k]}`;
+      }
+    }
+  };
+  for (let f = 0; f < frames; ++f) {
+    for (const object of order) {
+      world.fromArray(poses, f * nodeFloats + 16 * index.get(object));
+      local.copy(object.parent.matrixWorld).invert().multiply(world);
+      local.decompose(object.position, object.quaternion, object.scale);
+      object.matrix.copy(local);
+      object.updateMatrixWorld(false);
+      object.matrixWorld.copy(world);
+    }
+    if (f === data.hitFrame) rig.hit(new THREE.Vector3(0, 0, 1), 2.0);
+    rig.update(f === 0 ? 0 : data.dt);
+    const base = f * perFrame;
+    // A jiggling muscle joint's scene matrix holds its jiggle too: the runtime's muscle matrix for it (the
+    // scene's is compared with the native jiggled one below).
+    rig.muscles.forEach((muscle, m) => {
+      const values = jiggling.has(muscle.node) ? rig.lastSkinned.subarray(16 * m, 16 * m + 16) : muscle.node.matrixWorld.elements;
+      compare(values, 0, base + 16 * m, 'muscle_m', 'muscle_terms', `frame ${f} ${muscle.name}`);
+    });
+    rig.jiggles.forEach((jiggle, j) => {
+      for (let k = 0; k < 4; ++k) out.correction = Math.max(out.correction, Math.abs(rig.lastCorrections[4 * j + k] - expected[base + 16 * data.muscles + 4 * j + k]));
+      const at = base + 16 * data.muscles + 4 * data.jiggles + 16 * j;
+      compare(jiggle.node.matrixWorld.elements, 0, at, 'jiggle_m', 'jiggle_terms', `frame ${f} jiggle ${jiggle.name}`);
+      out.largest_jiggle_deg = Math.max(out.largest_jiggle_deg, (jiggle.angle * 180) / Math.PI);
+    });
+    ++out.frames;
+  }
+  out.muscles = rig.muscles.length;
+  out.jiggles = rig.jiggles.length;
+  rig.record = false;
   return out;
 }
 
@@ -225,15 +323,16 @@ function sampledAgainstRuntime(player) {
       player.setMuscleMode('runtime');
       player.selectClip(clip.index);
       player.seek(time);
-      const runtime = player.lastEvaluation.map((e) => e.skinned);
+      const runtime = player.muscles.map((entry) => entry.node.matrixWorld.elements.slice());
       player.setMuscleMode('sampled');
       player.seek(time);
       player.muscles.forEach((entry, m) => {
         if (jiggling.has(entry.node)) return;
         const sampled = entry.node.matrixWorld.elements;
+        const size = linearScale(runtime[m]);
         for (let k = 0; k < 16; ++k) {
           const key = k >= 12 ? 'translation_m' : 'linear';
-          out[key] = Math.max(out[key], Math.abs(sampled[k] - runtime[m][k]));
+          out[key] = Math.max(out[key], Math.abs(sampled[k] - runtime[m][k]) / (k >= 12 ? 1 : size));
         }
         ++out.compared;
       });
@@ -244,15 +343,16 @@ function sampledAgainstRuntime(player) {
   return out;
 }
 
-// What one frame of the JavaScript runtime costs: every muscle evaluated and its node set (the pose
-// stays), microseconds per frame over 200 frames.
+// What one frame of the plugin costs: the skeleton's matrices into the WebAssembly runtime, every
+// muscle evaluated and its node set, the jiggles stepped by 1/60 s (the pose stays), microseconds per
+// frame over 200 frames.
 function runtimeCost(player) {
   if (!player.availableMuscleModes().includes('runtime')) return null;
   player.setMuscleMode('runtime');
   const frames = 200;
   const t0 = performance.now();
-  for (let f = 0; f < frames; ++f) player.applyMuscles();
-  return { muscles: player.muscles.length, us_per_frame: ((performance.now() - t0) * 1000) / frames };
+  for (let f = 0; f < frames; ++f) player.rig.update(1 / 60);
+  return { muscles: player.muscles.length, jiggles: player.jiggles.length, us_per_frame: ((performance.now() - t0) * 1000) / frames };
 }
 
 export async function runSelfTest(player, reference, loadError = null) {
@@ -302,6 +402,7 @@ export async function runSelfTest(player, reference, loadError = null) {
     if (reference) {
       stage('matrices', () => compareMatrices(player, reference));
       stage('skinning', () => compareSkinning(player, reference));
+      if (reference.capi) stage('capi', () => compareCapiFrames(player, reference.capi));
     }
   }
   result.seconds.total = (performance.now() - started) / 1000;

@@ -91,6 +91,11 @@ class Rig {
   jiggleNode(j, which) {
     return this._runtime.exports.rigbake_rig_jiggle_node(this._handle, j, which);
   }
+  // rigbake_rig_node_used: true when some muscle or jiggle reads node n's matrix (a host need only
+  // write those into nodeMatrices).
+  nodeUsed(n) {
+    return this._runtime.exports.rigbake_rig_node_used(this._handle, n) === 1;
+  }
 
   // rigbake_rig_evaluate: the muscles' skinned world matrices for the pose in nodeMatrices (or in
   // `nodeMatrices`, copied there first). With { helpers: true } or { drivers: true } also those.

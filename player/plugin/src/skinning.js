@@ -1,6 +1,6 @@
 // Skinning 4, 7 or 10 influences from rigbake's packed attributes (docs/packed-influences.md) in the
-// player's own vertex shader: three.js skins 4 (its skinIndex / skinWeight, from JOINTS_0 / WEIGHTS_0;
-// three.js issue 26137), so the player patches three's skinning chunks of the mesh's own material.
+// mesh's own vertex shader: three.js skins 4 (its skinIndex / skinWeight, from JOINTS_0 / WEIGHTS_0;
+// three.js issue 26137), so the plugin patches three's skinning chunks of the mesh's own material.
 // The decoder is the one of formats/shaders/unpack_influences.glsl, written for GLSL ES 3.00 (no
 // bitfieldExtract there: shifts and masks). The same GLSL text is compiled into a transform-feedback
 // program (readBackSkinning) that the browser test reads the GPU-skinned positions back with.
@@ -150,6 +150,40 @@ export function makeBoneTexture(skeleton) {
   return texture;
 }
 
+// The skinning state of a skinned mesh (mesh.userData.rigbakeSkinning), made once: its packed
+// attributes renamed for WebGL 2, its materials cloned (a material shared with another mesh must not
+// get this mesh's shader) and patched to skin every influence the file packs. A host changes
+// `influences` (4 = three's own skinning, up to fileInfluences) or `heatmap` and calls
+// applySkinningState(mesh) to recompile.
+export function prepareSkinning(mesh) {
+  if (mesh.userData.rigbakeSkinning) return mesh.userData.rigbakeSkinning;
+  const layout = preparePackedAttributes(mesh.geometry);
+  const state = {
+    layout,
+    fileInfluences: layout ? layout.influences : 0,
+    influences: layout ? layout.influences : 4,
+    heatmap: false,
+    plainTexture: makeBoneTexture(mesh.skeleton),
+    uniforms: { rbPlainBones: { value: null }, rbHeatScale: { value: 0.01 } },
+    patched: null,
+  };
+  state.uniforms.rbPlainBones.value = state.plainTexture;
+  mesh.material = Array.isArray(mesh.material) ? mesh.material.map((m) => m.clone()) : mesh.material.clone();
+  mesh.userData.rigbakeSkinning = state;
+  applySkinningState(mesh);
+  return state;
+}
+
+// Recompiles the mesh's materials when its state's influences or heatmap changed.
+export function applySkinningState(mesh) {
+  const state = mesh.userData.rigbakeSkinning;
+  if (!state.fileInfluences) state.influences = 4;
+  const key = `${state.influences}-${state.heatmap}`;
+  if (state.patched === key) return;
+  state.patched = key;
+  for (const material of Array.isArray(mesh.material) ? mesh.material : [mesh.material]) patchSkinningMaterial(material, state);
+}
+
 // Patches a (cloned) material of a skinned mesh. mode: {influences: 4 | 7 | 10 (4 = three's own
 // skinning of JOINTS_0 / WEIGHTS_0), fileInfluences, heatmap, uniforms: {rbPlainBones, rbHeatScale}}.
 // The shader is recompiled when the key changes.
@@ -259,13 +293,26 @@ function compile(gl, type, source) {
 // by WebGL2 transform feedback on its own context (so three's GL state is untouched): world-space
 // positions (bindMatrix applied, as three's shader; bindMatrixInverse and the model matrix cancel
 // out). `boneData` is three's bone texture data for this frame (Skeleton.boneMatrices, padded).
-export function readBackSkinning(gl, mesh, boneData, fileInfluences, keep = fileInfluences) {
+// The read-back programs of a context, one per (N, kept) pair: compiling one costs about a second under
+// software WebGL, and a test reads many frames back.
+const readBackPrograms = new WeakMap();
+function readBackProgram(gl, fileInfluences, keep) {
+  if (!readBackPrograms.has(gl)) readBackPrograms.set(gl, new Map());
+  const programs = readBackPrograms.get(gl);
+  const key = `${fileInfluences}-${keep}`;
+  if (programs.has(key)) return programs.get(key);
   const program = gl.createProgram();
   gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, READBACK_VERTEX(fileInfluences, keep)));
   gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, READBACK_FRAGMENT));
   gl.transformFeedbackVaryings(program, ['rbSkinned'], gl.INTERLEAVED_ATTRIBS);
   gl.linkProgram(program);
   if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(`skinning program: ${gl.getProgramInfoLog(program)}`);
+  programs.set(key, program);
+  return program;
+}
+
+export function readBackSkinning(gl, mesh, boneData, fileInfluences, keep = fileInfluences) {
+  const program = readBackProgram(gl, fileInfluences, keep);
   gl.useProgram(program);
   const geometry = mesh.geometry;
   const count = geometry.getAttribute('position').count;
@@ -327,7 +374,6 @@ export function readBackSkinning(gl, mesh, boneData, fileInfluences, keep = file
   buffers.forEach((buffer) => gl.deleteBuffer(buffer));
   gl.deleteTexture(texture);
   gl.deleteVertexArray(vao);
-  gl.deleteProgram(program);
   if (error !== gl.NO_ERROR) throw new Error(`skinning read-back: WebGL error ${error}`);
   return result;
 }
