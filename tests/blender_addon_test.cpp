@@ -103,6 +103,7 @@ struct CRig {
 };
 
 enum class JiggledMuscles { kPlayed, kSkipped };
+enum class Clips { kEvery, kSampled };  // every clip of the file must be sampled, or those sampled
 
 // Whether the file's muscle `m` has helper joints (the bake writes them for every muscle or none).
 bool muscleHasHelpers(const std::string& glb, size_t m) {
@@ -115,7 +116,7 @@ bool muscleHasHelpers(const std::string& glb, size_t m) {
 // MuscleRigJob<double>, a jiggled one against the C API's jiggle (kPlayed) or not at all (kSkipped: a
 // .blend opened without the add-on has no frame handler).
 Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& clips, JiggledMuscles jiggled_muscles,
-                             int* jiggled_compared) {
+                             int* jiggled_compared, Clips which = Clips::kEvery) {
   const LoadedCharacter loaded = loadCharacter(baked);
   const BakedFileData file = readBakedFileData(loaded);
   REQUIRE(file.rig.present);
@@ -156,6 +157,7 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
     if (clip.gltf_animation < 0 || clip.measure_only) continue;
     INFO(baked << " clip " << clip.name);
     const std::string key = std::to_string(clip.gltf_animation);
+    if (which == Clips::kSampled && !clips.contains(key)) continue;
     REQUIRE(clips.contains(key));
     const nlohmann::json& sampled = clips.at(key);
     REQUIRE(sampled["times"].size() >= 2);
@@ -344,6 +346,16 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
     if (!character.bake_flags.empty()) {
       CHECK(jiggled > 0);
       CHECK(live.skeleton_jiggle_frames > 0);
+      // Bake jiggles to action on the first clip, then that clip played from the keys alone.
+      const nlohmann::json baked_jiggles = readJson(job_dir + "/baked_jiggles.json");
+      int jiggled_baked = 0;
+      const Agreement keyed = compareWithRuntime(baked, baked_jiggles["clips"], JiggledMuscles::kPlayed, &jiggled_baked, Clips::kSampled);
+      CHECK(keyed.clips == 1);
+      CHECK(jiggled_baked > 0);
+      CHECK(keyed.skeleton_jiggle_frames > 0);
+      CHECK(baked_jiggles["keys"].get<int>() == keyed.frames * 4);  // the skinned bone and three skeleton joints, per frame
+      WARN(character.name << ": jiggles baked to action, " << baked_jiggles["keys"] << " keys, played without the handler: skeleton "
+                          << keyed.jiggle_position << " m, " << keyed.jiggle_frame << "; muscles " << keyed.position << " m, " << keyed.frame);
     }
     const nlohmann::json reopened = readJson(job_dir + "/reopened.json");
     CHECK(reopened["addons"].empty());

@@ -40,20 +40,20 @@ def column_major(matrix):
     return [value for column in matrix.transposed() for value in column]
 
 
-def sample(armature):
+def sample(armature, only=None, whole_frames=False):
     """sample_clips with the meshes out of the depsgraph: their skinning (Cyberpunk: 7778 vertices)
     was nine tenths of a key's time, and nothing sampled reads them."""
     meshes = [o for o in bpy.data.objects if o.type == 'MESH' and not o.hide_viewport]
     for mesh in meshes:
         mesh.hide_viewport = True
     try:
-        return sample_clips(armature)
+        return sample_clips(armature, only, whole_frames)
     finally:
         for mesh in meshes:
             mesh.hide_viewport = False
 
 
-def sample_clips(armature):
+def sample_clips(armature, only=None, whole_frames=False):
     """Every clip at every key: the skinned joints' world matrices in glTF model space (the bone's
     pose times its rest, mapped back: the skinned bone's rest is the joint's bind frame), and the
     drivers, as {glTF animation index: {"times", "skinned", "ratio", "twist"}}."""
@@ -83,7 +83,7 @@ def sample_clips(armature):
     helper_objects = [bpy.data.objects[name] for muscle in rig["muscles"] for name in helpers.get(muscle["name"], [])]
     out = {}
     for track in armature.animation_data.nla_tracks if armature.animation_data else []:
-        if track.name not in tracks or not track.strips:
+        if track.name not in tracks or not track.strips or (only is not None and track.name != only):
             continue
         action = track.strips[0].action
         armature.animation_data.action = action
@@ -94,7 +94,10 @@ def sample_clips(armature):
             pose_bone.matrix_basis = Matrix([basis[r * 4:r * 4 + 4] for r in range(4)]) if basis else Matrix.Identity(4)
         clip = {"times": [], "skinned": [], "ratio": [], "twist": [], "helpers": [],
                 "skeleton_jiggles": [j for j, _, _ in skeleton_jiggles], "skeleton_jiggled": []}
-        for frame in key_frames(action):
+        frames = key_frames(action)
+        if whole_frames:  # every whole frame from the clip's first key to its last, as a bake keys them
+            frames = [float(f) for f in range(int(frames[0]), int(frames[-1]) + 1)]
+        for frame in frames:
             scene.frame_set(int(frame), subframe=frame - int(frame))
             # The add-on's frame handler turns the jiggled bones after the frame's evaluation.
             bpy.context.view_layer.update()
@@ -127,6 +130,8 @@ def live(job):
     write(os.path.join(job["dir"], "live.json"), sample(armature))
     muscle_file.export(armature, os.path.join(job["dir"], "roundtrip.json"))
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(job["dir"], "rig.blend"))
+    if armature.get("rigbake_jiggles", 0):
+        bake_jiggles(job, armature)
     # Move one locator 2 cm along model-space x (its rest position; the bone keeps it there).
     name, role = job["move"]
     empty = bpy.data.objects[rig_build.locator_name(name, role)]
@@ -139,6 +144,24 @@ def live(job):
     write(os.path.join(job["dir"], "moved_target.json"), {"muscle": name, "role": role,
                                                            "world": [moved[0], moved[2], -moved[1]]})
     muscle_file.export(armature, os.path.join(job["dir"], "moved.json"))
+
+
+def bake_jiggles(job, armature):
+    """The panel's *Bake jiggles to action* over the first clip's frames, then that clip sampled again
+    at the same whole frames with the frame handler off (the keys play the jiggles): baked_jiggles.json."""
+    from rigbake_blender import jiggle_play
+    track = armature.animation_data.nla_tracks[armature["rigbake_clips"][0]]
+    armature.animation_data.action = track.strips[0].action
+    rest_pose = json.loads(armature["rigbake_rest_pose"])
+    for pose_bone in armature.pose.bones:
+        basis = rest_pose.get(pose_bone.name)
+        pose_bone.matrix_basis = Matrix([basis[r * 4:r * 4 + 4] for r in range(4)]) if basis else Matrix.Identity(4)
+    frames = key_frames(track.strips[0].action)
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end = int(frames[0]), int(frames[-1])
+    keys = jiggle_play.bake_jiggles(bpy.context, armature)
+    write(os.path.join(job["dir"], "baked_jiggles.json"),
+          {"keys": keys, "clips": sample(armature, only=track.name, whole_frames=True)})
 
 
 def operators(job):
