@@ -71,6 +71,7 @@ void requireNumbersEqual(const nlohmann::json& a, const nlohmann::json& b, const
 struct Agreement {
   double position = 0, frame = 0, ratio = 0, twist = 0, helper_position = 0, helper_frame = 0;
   double jiggle_position = 0, jiggle_frame = 0;  // jiggling skeleton joints
+  double jiggle_turn = 0;  // the runtime's own jiggle: largest rotation term of jiggled minus animated
   int clips = 0, frames = 0, muscles_compared = 0, skeleton_jiggle_frames = 0;
 };
 
@@ -102,7 +103,7 @@ struct CRig {
   CRig& operator=(const CRig&) = delete;
 };
 
-enum class JiggledMuscles { kPlayed, kSkipped };
+enum class JiggledMuscles { kPlayed, kAtRest };
 enum class Clips { kEvery, kSampled };  // every clip of the file must be sampled, or those sampled
 
 // Whether the file's muscle `m` has helper joints (the bake writes them for every muscle or none).
@@ -113,8 +114,8 @@ bool muscleHasHelpers(const std::string& glb, size_t m) {
 }
 
 // The sampled clips of one Blender run against the C++ runtime at the same times: every muscle against
-// MuscleRigJob<double>, a jiggled one against the C API's jiggle (kPlayed) or not at all (kSkipped: a
-// .blend opened without the add-on has no frame handler).
+// MuscleRigJob<double>, a jiggled one against the C API's jiggle (kPlayed) or at rest (kAtRest: a
+// .blend opened without the add-on has no frame handler, and the add-on saves it with the jiggles at rest).
 Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& clips, JiggledMuscles jiggled_muscles,
                              int* jiggled_compared, Clips which = Clips::kEvery) {
   const LoadedCharacter loaded = loadCharacter(baked);
@@ -190,11 +191,13 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
       REQUIRE(blender.size() == skinned.size());
       for (size_t m = 0; m < muscles; ++m) {
         INFO("time " << time << " muscle " << file.rig.names[m]);
-        if (!compared[m] || (jiggle_of[m] >= 0 && jiggled_muscles == JiggledMuscles::kSkipped)) continue;
+        if (!compared[m]) continue;
         if (jiggle_of[m] >= 0) ++*jiggled_compared;
         double position = 0, frame = 0;
         for (int k = 0; k < 16; ++k) {
-          const double reference = jiggle_of[m] >= 0 ? jiggled[16 * jiggle_of[m] + k] : skinned[16 * m + k];
+          // A .blend opened without the add-on (kAtRest) was saved with its jiggles at rest.
+          const bool played = jiggle_of[m] >= 0 && jiggled_muscles == JiggledMuscles::kPlayed;
+          const double reference = played ? jiggled[16 * jiggle_of[m] + k] : skinned[16 * m + k];
           const double difference = std::abs(blender[16 * m + k] - reference);
           if (k >= 12 && k < 15) position = std::max(position, difference);
           if (k < 12 && k % 4 != 3) frame = std::max(frame, difference);
@@ -230,12 +233,20 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
       const nlohmann::json& indices = sampled["skeleton_jiggles"];
       const std::vector<double> blender_jiggled = sampled["skeleton_jiggled"][f].get<std::vector<double>>();
       REQUIRE(blender_jiggled.size() == 16 * indices.size());
-      for (size_t i = 0; i < indices.size() && jiggled_muscles == JiggledMuscles::kPlayed; ++i) {
+      // Without the add-on (kAtRest) the file was saved with its jiggles at rest: the joint is where
+      // the clip puts it.
+      for (size_t i = 0; i < indices.size(); ++i) {
         const int j = indices[i].get<int>();
         REQUIRE(j < jiggles);
+        const int node = rigbake_rig_jiggle_node(c_rig.rig, j, 0);
+        const auto joint = std::find(skeleton.nodes.begin(), skeleton.nodes.end(), node);
+        REQUIRE(joint != skeleton.nodes.end());
+        const Eigen::Matrix4d animated = pose.world[joint - skeleton.nodes.begin()].matrix();
         double position = 0, frame = 0;
         for (int k = 0; k < 16; ++k) {
-          const double difference = std::abs(blender_jiggled[16 * i + k] - jiggled[16 * j + k]);
+          const double reference = jiggled_muscles == JiggledMuscles::kPlayed ? jiggled[16 * j + k] : animated(k % 4, k / 4);
+          if (k < 12 && k % 4 != 3) agreement.jiggle_turn = std::max(agreement.jiggle_turn, std::abs(jiggled[16 * j + k] - animated(k % 4, k / 4)));
+          const double difference = std::abs(blender_jiggled[16 * i + k] - reference);
           if (k >= 12 && k < 15) position = std::max(position, difference);
           if (k < 12 && k % 4 != 3) frame = std::max(frame, difference);
         }
@@ -346,6 +357,8 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
     if (!character.bake_flags.empty()) {
       CHECK(jiggled > 0);
       CHECK(live.skeleton_jiggle_frames > 0);
+      // The jiggles move far more than the tolerance, so a jiggle not played (or frozen) would fail.
+      CHECK(live.jiggle_turn > 20 * kFrameTolerance);
       // Bake jiggles to action on the first clip, then that clip played from the keys alone.
       const nlohmann::json baked_jiggles = readJson(job_dir + "/baked_jiggles.json");
       int jiggled_baked = 0;
@@ -359,13 +372,15 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
     }
     const nlohmann::json reopened = readJson(job_dir + "/reopened.json");
     CHECK(reopened["addons"].empty());
-    const Agreement saved = compareWithRuntime(baked, reopened["clips"], JiggledMuscles::kSkipped, &jiggled_reopened);
+    const Agreement saved = compareWithRuntime(baked, reopened["clips"], JiggledMuscles::kAtRest, &jiggled_reopened);
+    CHECK(saved.skeleton_jiggle_frames == live.skeleton_jiggle_frames);
     WARN(character.name << ": " << live.clips << " clips, " << live.frames << " keys; largest difference from the C++ runtime: "
                         << live.position << " m position, " << live.frame << " rotation/scale, ratio " << live.ratio << ", twist "
                         << live.twist << " rad (" << jiggled << " jiggled muscle frames; " << live.muscles_compared
                         << " muscles compared); skeleton jiggles " << live.jiggle_position << " m, " << live.jiggle_frame << " ("
-                        << live.skeleton_jiggle_frames << " frames); helpers " << live.helper_position << " m, " << live.helper_frame
-                        << "; reopened without the add-on: " << saved.position << " m, " << saved.frame);
+                        << live.skeleton_jiggle_frames << " frames, turning up to " << live.jiggle_turn << "); helpers " << live.helper_position << " m, " << live.helper_frame
+                        << "; reopened without the add-on: " << saved.position << " m, " << saved.frame
+                        << " (skeleton jiggles at rest: " << saved.jiggle_position << " m, " << saved.jiggle_frame << ")");
 
     double largest = 0;
     requireNumbersEqual(readJson(job_dir + "/roundtrip.json"), readJson(job_dir + "/muscles.json"), "roundtrip.json", &largest);

@@ -215,6 +215,43 @@ def _on_frame(scene, depsgraph=None):
             print(str(error))
 
 
+_saved_turns = []  # (datablock, rotation) the jiggles had when a save began
+
+
+def _jiggle_turns():
+    """(pose bone or empty, its rotation) of every live (unbaked) jiggle: the skinned bones' and the
+    skeleton joints' empties."""
+    out = []
+    for armature in [o for o in bpy.data.objects if o.type == 'ARMATURE' and o.get("rigbake_jiggles", 0) > 0
+                     and not o.get("rigbake_jiggles_baked")]:
+        rig = json.loads(armature["rigbake_rig"])
+        nodes = json.loads(armature["rigbake_nodes"])
+        skinned = {m["skinnedNode"] for m in rig["muscles"]}
+        for jiggle in rig.get("jiggles", []):
+            if jiggle["node"] in skinned and str(jiggle["node"]) in nodes:
+                out.append(armature.pose.bones[nodes[str(jiggle["node"])][0]])
+        out += [bpy.data.objects[name] for name in json.loads(armature.get("rigbake_jiggle_empties", "{}")).values()
+                if name in bpy.data.objects]
+    return out
+
+
+@persistent
+def _before_save(*_):
+    """A .blend opened without the add-on has no frame handler to move the jiggles: it is saved with
+    them at rest (no turn), not frozen at the frame shown; they are put back once it is written."""
+    _saved_turns.clear()
+    for owner in _jiggle_turns():
+        _saved_turns.append((owner, owner.rotation_quaternion.copy()))
+        owner.rotation_quaternion = (1, 0, 0, 0)
+
+
+@persistent
+def _after_save(*_):
+    for owner, rotation in _saved_turns:
+        owner.rotation_quaternion = rotation
+    _saved_turns.clear()
+
+
 def bake_jiggles(context, armature):
     """Keys every jiggled skinned bone's rotation at every frame of the scene's range into the
     armature's action (a jiggling skeleton joint: its jiggle empty's rotation, into the empty's own
@@ -236,12 +273,17 @@ def bake_jiggles(context, armature):
     return keys
 
 
+_HANDLERS = (("frame_change_post", _on_frame), ("save_pre", _before_save), ("save_post", _after_save))
+
+
 def register():
-    if _on_frame not in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.append(_on_frame)
+    for kind, handler in _HANDLERS:
+        if handler not in getattr(bpy.app.handlers, kind):
+            getattr(bpy.app.handlers, kind).append(handler)
 
 
 def unregister():
-    if _on_frame in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.remove(_on_frame)
+    for kind, handler in _HANDLERS:
+        if handler in getattr(bpy.app.handlers, kind):
+            getattr(bpy.app.handlers, kind).remove(handler)
     _rigs.clear()
