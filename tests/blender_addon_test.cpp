@@ -70,7 +70,9 @@ void requireNumbersEqual(const nlohmann::json& a, const nlohmann::json& b, const
 
 struct Agreement {
   double position = 0, frame = 0, ratio = 0, twist = 0, helper_position = 0, helper_frame = 0;
-  int clips = 0, frames = 0;
+  double jiggle_position = 0, jiggle_frame = 0;  // jiggling skeleton joints
+  double jiggle_turn = 0;  // the runtime's own jiggle: largest rotation term of jiggled minus animated
+  int clips = 0, frames = 0, muscles_compared = 0, skeleton_jiggle_frames = 0;
 };
 
 // The glTF JSON chunk of a GLB.
@@ -101,7 +103,8 @@ struct CRig {
   CRig& operator=(const CRig&) = delete;
 };
 
-enum class JiggledMuscles { kPlayed, kSkipped };
+enum class JiggledMuscles { kPlayed, kAtRest };
+enum class Clips { kEvery, kSampled };  // every clip of the file must be sampled, or those sampled
 
 // Whether the file's muscle `m` has helper joints (the bake writes them for every muscle or none).
 bool muscleHasHelpers(const std::string& glb, size_t m) {
@@ -111,10 +114,10 @@ bool muscleHasHelpers(const std::string& glb, size_t m) {
 }
 
 // The sampled clips of one Blender run against the C++ runtime at the same times: every muscle against
-// MuscleRigJob<double>, a jiggled one against the C API's jiggle (kPlayed) or not at all (kSkipped: a
-// .blend opened without the add-on has no frame handler).
+// MuscleRigJob<double>, a jiggled one against the C API's jiggle (kPlayed) or at rest (kAtRest: a
+// .blend opened without the add-on has no frame handler, and the add-on saves it with the jiggles at rest).
 Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& clips, JiggledMuscles jiggled_muscles,
-                             int* jiggled_compared) {
+                             int* jiggled_compared, Clips which = Clips::kEvery) {
   const LoadedCharacter loaded = loadCharacter(baked);
   const BakedFileData file = readBakedFileData(loaded);
   REQUIRE(file.rig.present);
@@ -131,10 +134,31 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
     }
   }
   Agreement agreement;
+  // A jiggling skeleton joint turns its descendants with it; Blender's drivers read the locators as
+  // they are shown (jiggled) where the runtime reads the un-jiggled pose, so the muscles riding one at
+  // or below such a joint are not compared (docs/blender.md).
+  std::vector<bool> below_jiggle(skeleton.size(), false);
+  for (int j = 0; j < jiggles; ++j) {
+    const int node = rigbake_rig_jiggle_node(c_rig.rig, j, 0);
+    for (int joint = 0; joint < skeleton.size(); ++joint) {
+      for (int up = joint; up >= 0 && skeleton.nodes[joint] >= 0; up = skeleton.parents[up]) {
+        if (skeleton.nodes[up] == node && std::find(jiggle_of.begin(), jiggle_of.end(), j) == jiggle_of.end()) below_jiggle[joint] = true;
+      }
+    }
+  }
+  std::vector<bool> compared(muscles, true);
+  for (size_t m = 0; m < muscles; ++m) {
+    const runtime::RigMuscle<double>& muscle = rig.muscles[m];
+    for (int joint : {muscle.origin_joint, muscle.insertion_joint, muscle.carrier_joint}) compared[m] = compared[m] && !below_jiggle[joint];
+    if (compared[m]) ++agreement.muscles_compared;
+  }
+  REQUIRE(agreement.muscles_compared > 0);
+  if (jiggles == 0) CHECK(agreement.muscles_compared == static_cast<int>(muscles));
   for (const Clip& clip : loaded.character.clips) {
     if (clip.gltf_animation < 0 || clip.measure_only) continue;
     INFO(baked << " clip " << clip.name);
     const std::string key = std::to_string(clip.gltf_animation);
+    if (which == Clips::kSampled && !clips.contains(key)) continue;
     REQUIRE(clips.contains(key));
     const nlohmann::json& sampled = clips.at(key);
     REQUIRE(sampled["times"].size() >= 2);
@@ -167,11 +191,13 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
       REQUIRE(blender.size() == skinned.size());
       for (size_t m = 0; m < muscles; ++m) {
         INFO("time " << time << " muscle " << file.rig.names[m]);
-        if (jiggle_of[m] >= 0 && jiggled_muscles == JiggledMuscles::kSkipped) continue;
+        if (!compared[m]) continue;
         if (jiggle_of[m] >= 0) ++*jiggled_compared;
         double position = 0, frame = 0;
         for (int k = 0; k < 16; ++k) {
-          const double reference = jiggle_of[m] >= 0 ? jiggled[16 * jiggle_of[m] + k] : skinned[16 * m + k];
+          // A .blend opened without the add-on (kAtRest) was saved with its jiggles at rest.
+          const bool played = jiggle_of[m] >= 0 && jiggled_muscles == JiggledMuscles::kPlayed;
+          const double reference = played ? jiggled[16 * jiggle_of[m] + k] : skinned[16 * m + k];
           const double difference = std::abs(blender[16 * m + k] - reference);
           if (k >= 12 && k < 15) position = std::max(position, difference);
           if (k < 12 && k % 4 != 3) frame = std::max(frame, difference);
@@ -194,7 +220,7 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
       for (size_t m = 0; m < muscles; ++m) {
         if (!muscleHasHelpers(baked, m)) continue;
         REQUIRE(at + 48 <= blender_helpers.size());
-        for (int k = 0; k < 48; ++k) {
+        for (int k = 0; k < 48 && compared[m]; ++k) {
           const double difference = std::abs(blender_helpers[at + k] - helpers[48 * m + k]);
           if (k % 16 >= 12 && k % 16 < 15) agreement.helper_position = std::max(agreement.helper_position, difference);
           if (k % 16 < 12 && k % 4 != 3) agreement.helper_frame = std::max(agreement.helper_frame, difference);
@@ -202,6 +228,35 @@ Agreement compareWithRuntime(const std::string& baked, const nlohmann::json& cli
         at += 48;
       }
       CHECK(at == blender_helpers.size());
+      // Jiggling skeleton joints (played by the add-on's frame handler through a constraint) against
+      // the C API's jiggled world matrix of each.
+      const nlohmann::json& indices = sampled["skeleton_jiggles"];
+      const std::vector<double> blender_jiggled = sampled["skeleton_jiggled"][f].get<std::vector<double>>();
+      REQUIRE(blender_jiggled.size() == 16 * indices.size());
+      // Without the add-on (kAtRest) the file was saved with its jiggles at rest: the joint is where
+      // the clip puts it.
+      for (size_t i = 0; i < indices.size(); ++i) {
+        const int j = indices[i].get<int>();
+        REQUIRE(j < jiggles);
+        const int node = rigbake_rig_jiggle_node(c_rig.rig, j, 0);
+        const auto joint = std::find(skeleton.nodes.begin(), skeleton.nodes.end(), node);
+        REQUIRE(joint != skeleton.nodes.end());
+        const Eigen::Matrix4d animated = pose.world[joint - skeleton.nodes.begin()].matrix();
+        double position = 0, frame = 0;
+        for (int k = 0; k < 16; ++k) {
+          const double reference = jiggled_muscles == JiggledMuscles::kPlayed ? jiggled[16 * j + k] : animated(k % 4, k / 4);
+          if (k < 12 && k % 4 != 3) agreement.jiggle_turn = std::max(agreement.jiggle_turn, std::abs(jiggled[16 * j + k] - animated(k % 4, k / 4)));
+          const double difference = std::abs(blender_jiggled[16 * i + k] - reference);
+          if (k >= 12 && k < 15) position = std::max(position, difference);
+          if (k < 12 && k % 4 != 3) frame = std::max(frame, difference);
+        }
+        INFO("time " << time << " jiggle " << j << " position " << position << " frame " << frame);
+        CHECK(position <= kPositionTolerance);
+        CHECK(frame <= kFrameTolerance);
+        agreement.jiggle_position = std::max(agreement.jiggle_position, position);
+        agreement.jiggle_frame = std::max(agreement.jiggle_frame, frame);
+        ++agreement.skeleton_jiggle_frames;
+      }
       ++agreement.frames;
     }
   }
@@ -227,10 +282,25 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
   // Two ROM clips that move what the mannequin's own three clips do not (the shoulder forwards, the
   // spine's twist); all ten cost Blender another 500 keys to sample for code paths these run.
   runCliOk("rom " + quoted(mannequin) + " --clips shoulder_flexion,spine_twist -o " + quoted(dir / "mannequin_rom.glb"));
-  // The mannequin's biceps jiggle (played by the runtime library in a frame handler).
-  std::vector<TestCharacter> characters = {{"mannequin", dir / "mannequin_rom.glb", "LeftBicep", "--jiggle biceps"}};
+  // The mannequin with the talk's jiggles (presets/jiggle/gow_examples.json) on both hands and the head,
+  // skeleton joints, and on the left biceps' skinned joint, played by the runtime library. The preset's
+  // forearm-twist jiggles are left out: the biceps ride the forearm twist joints, and a muscle riding a
+  // jiggling skeleton joint is not compared (its drivers read the jiggled pose in Blender).
+  nlohmann::json jiggles = readJson(test::sourceDir() + "/presets/jiggle/gow_examples.json");
+  jiggles.erase("$schema");
+  nlohmann::json kept = nlohmann::json::array();
+  for (const nlohmann::json& jiggle : jiggles["jiggles"]) {
+    if (jiggle.value("landmark", "").rfind("forearm_twist", 0) != 0) kept.push_back(jiggle);
+  }
+  REQUIRE(kept.size() == 4);
+  jiggles["jiggles"] = kept;
+  std::ofstream(dir / "jiggles.json") << jiggles.dump();
+  std::vector<TestCharacter> characters = {{"mannequin", dir / "mannequin_rom.glb", "LeftBicep", "--jiggle " + quoted(dir / "jiggles.json")}};
   const std::string cesium = test::requireAsset("CesiumMan.glb");
   if (!cesium.empty()) characters.push_back({"CesiumMan", cesium, "LeftBicep", ""});
+  // Cyberpunk: its armature node scales x100 (FBX2glTF), so its bind matrices and its bones' frames do.
+  const std::string cyberpunk = test::requireAsset("Quaternius_Cyberpunk_Character.glb");
+  if (!cyberpunk.empty()) characters.push_back({"Cyberpunk", cyberpunk, "LeftBicep", ""});
 
   nlohmann::json jobs = {{"addon_dir", test::sourceDir() + "/blender"}, {"jobs", nlohmann::json::array()}};
   for (const TestCharacter& character : characters) {
@@ -284,14 +354,33 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
     const std::string baked = job_dir + "/baked.glb";
     int jiggled = 0, jiggled_reopened = 0;
     const Agreement live = compareWithRuntime(baked, readJson(job_dir + "/live.json"), JiggledMuscles::kPlayed, &jiggled);
-    if (!character.bake_flags.empty()) CHECK(jiggled > 0);
+    if (!character.bake_flags.empty()) {
+      CHECK(jiggled > 0);
+      CHECK(live.skeleton_jiggle_frames > 0);
+      // The jiggles move far more than the tolerance, so a jiggle not played (or frozen) would fail.
+      CHECK(live.jiggle_turn > 20 * kFrameTolerance);
+      // Bake jiggles to action on the first clip, then that clip played from the keys alone.
+      const nlohmann::json baked_jiggles = readJson(job_dir + "/baked_jiggles.json");
+      int jiggled_baked = 0;
+      const Agreement keyed = compareWithRuntime(baked, baked_jiggles["clips"], JiggledMuscles::kPlayed, &jiggled_baked, Clips::kSampled);
+      CHECK(keyed.clips == 1);
+      CHECK(jiggled_baked > 0);
+      CHECK(keyed.skeleton_jiggle_frames > 0);
+      CHECK(baked_jiggles["keys"].get<int>() == keyed.frames * 4);  // the skinned bone and three skeleton joints, per frame
+      WARN(character.name << ": jiggles baked to action, " << baked_jiggles["keys"] << " keys, played without the handler: skeleton "
+                          << keyed.jiggle_position << " m, " << keyed.jiggle_frame << "; muscles " << keyed.position << " m, " << keyed.frame);
+    }
     const nlohmann::json reopened = readJson(job_dir + "/reopened.json");
     CHECK(reopened["addons"].empty());
-    const Agreement saved = compareWithRuntime(baked, reopened["clips"], JiggledMuscles::kSkipped, &jiggled_reopened);
+    const Agreement saved = compareWithRuntime(baked, reopened["clips"], JiggledMuscles::kAtRest, &jiggled_reopened);
+    CHECK(saved.skeleton_jiggle_frames == live.skeleton_jiggle_frames);
     WARN(character.name << ": " << live.clips << " clips, " << live.frames << " keys; largest difference from the C++ runtime: "
                         << live.position << " m position, " << live.frame << " rotation/scale, ratio " << live.ratio << ", twist "
-                        << live.twist << " rad (" << jiggled << " jiggled muscle frames); helpers " << live.helper_position << " m, " << live.helper_frame
-                        << "; reopened without the add-on: " << saved.position << " m, " << saved.frame);
+                        << live.twist << " rad (" << jiggled << " jiggled muscle frames; " << live.muscles_compared
+                        << " muscles compared); skeleton jiggles " << live.jiggle_position << " m, " << live.jiggle_frame << " ("
+                        << live.skeleton_jiggle_frames << " frames, turning up to " << live.jiggle_turn << "); helpers " << live.helper_position << " m, " << live.helper_frame
+                        << "; reopened without the add-on: " << saved.position << " m, " << saved.frame
+                        << " (skeleton jiggles at rest: " << saved.jiggle_position << " m, " << saved.jiggle_frame << ")");
 
     double largest = 0;
     requireNumbersEqual(readJson(job_dir + "/roundtrip.json"), readJson(job_dir + "/muscles.json"), "roundtrip.json", &largest);

@@ -1,50 +1,45 @@
-"""The runtime's shared library from Python ctypes, as the Blender add-on loads it (docs/runtime.md):
-the same frames and output as tests/c_api/runtime_c_check.c, which tests/runtime_c_api_test.cpp compares
-with the in-process C API bit for bit.
+"""The runtime's shared library from Python ctypes, through the Blender add-on's own binding
+(blender/rigbake_blender/runtime_lib.py, which needs no bpy): the same frames and output as
+tests/c_api/runtime_c_check.c, which tests/runtime_c_api_test.cpp compares with the in-process C API
+bit for bit. A signature declared wrongly in the add-on's binding fails here.
 
 usage: python3 runtime_ctypes_check.py LIBRARY EXTENSION.json NODE_COUNT POSES.f32 FRAME_SECONDS OUT.f32
 """
 import array
 import ctypes
+import os
 import sys
+
+# The add-on's package directory, imported as plain modules: runtime_lib imports nothing of Blender's.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "blender", "rigbake_blender"))
+import runtime_lib  # noqa: E402
 
 
 def main():
     library, extension_path, node_count, poses_path, frame_seconds, out_path = sys.argv[1:7]
     node_count = int(node_count)
-    lib = ctypes.CDLL(library)
-    floats = ctypes.POINTER(ctypes.c_float)
-    lib.rigbake_last_error.restype = ctypes.c_char_p
-    lib.rigbake_rig_create.restype = ctypes.c_void_p
-    lib.rigbake_rig_create.argtypes = [ctypes.c_char_p, ctypes.c_size_t, ctypes.c_int]
-    lib.rigbake_rig_destroy.argtypes = [ctypes.c_void_p]
-    for name in ("rigbake_rig_muscle_count", "rigbake_rig_jiggle_count"):
-        getattr(lib, name).argtypes = [ctypes.c_void_p]
-    lib.rigbake_rig_evaluate.argtypes = [ctypes.c_void_p, floats, floats, floats, floats]
-    lib.rigbake_rig_store_skinned.argtypes = [ctypes.c_void_p, floats, floats]
-    lib.rigbake_jiggle_impulse.argtypes = [ctypes.c_void_p, ctypes.c_int, floats, ctypes.c_float]
-    lib.rigbake_jiggle_step.argtypes = [ctypes.c_void_p, floats, ctypes.c_float, ctypes.c_int, floats, floats, floats, floats]
-
-    text = open(extension_path, "rb").read()
-    rig = lib.rigbake_rig_create(text, len(text), node_count)
-    if not rig:
-        sys.exit("runtime_ctypes_check: " + lib.rigbake_last_error().decode())
+    # Only this path: the check must load the library the C program links, not one on the system's path.
+    lib = runtime_lib.declare(ctypes.CDLL(library))
+    assert lib.rigbake_runtime_version() // 10000 == runtime_lib.API_MAJOR, lib.rigbake_runtime_version()
+    rig = runtime_lib.create_rig(lib, open(extension_path, "rb").read(), node_count)
+    assert lib.rigbake_rig_node_count(rig) == node_count
     muscles, jiggles = lib.rigbake_rig_muscle_count(rig), lib.rigbake_rig_jiggle_count(rig)
     poses = array.array("f")
     poses.frombytes(open(poses_path, "rb").read())
     per_frame = 16 * node_count
-    skinned = (ctypes.c_float * (16 * max(muscles, 1)))()
-    corrections = (ctypes.c_float * (4 * max(jiggles, 1)))()
-    hit = (ctypes.c_float * 3)(0.0, 0.0, 1.0)
+    skinned = runtime_lib.floats(16 * muscles)
+    corrections = runtime_lib.floats(4 * jiggles)
+    hit = runtime_lib.floats(3, (0.0, 0.0, 1.0))
     dt = float(frame_seconds)
     out = array.array("f")
     for frame in range(len(poses) // per_frame):
-        pose = (ctypes.c_float * per_frame)(*poses[frame * per_frame:(frame + 1) * per_frame])
-        assert lib.rigbake_rig_evaluate(rig, pose, skinned, None, None) == 0, lib.rigbake_last_error()
-        assert lib.rigbake_rig_store_skinned(rig, skinned, pose) == 0
+        pose = runtime_lib.floats(per_frame, poses[frame * per_frame:(frame + 1) * per_frame])
+        runtime_lib.check(lib, lib.rigbake_rig_evaluate(rig, pose, skinned, None, None), "evaluate")
+        runtime_lib.check(lib, lib.rigbake_rig_store_skinned(rig, skinned, pose), "store")
         if frame == 5 and jiggles > 0:
-            assert lib.rigbake_jiggle_impulse(rig, -1, hit, 2.0) == 0
-        assert lib.rigbake_jiggle_step(rig, pose, 0.0 if frame == 0 else dt, 0, corrections, None, None, None) == 0
+            runtime_lib.check(lib, lib.rigbake_jiggle_impulse(rig, -1, hit, 2.0), "impulse")
+        runtime_lib.check(lib, lib.rigbake_jiggle_step(rig, pose, 0.0 if frame == 0 else dt, 0, corrections, None, None, None),
+                          "step")
         out.extend(skinned[:16 * muscles])
         out.extend(corrections[:4 * jiggles])
     lib.rigbake_rig_destroy(rig)

@@ -16,10 +16,10 @@ bl_info = {
 
 if "bpy" in locals():
     import importlib
-    for _module in (gltf_frames, rig_build, muscle_file, cli, runtime_lib, ui):  # noqa: F821
+    for _module in (gltf_frames, runtime_lib, rig_build, muscle_file, cli, jiggle_play, ui):  # noqa: F821
         importlib.reload(_module)
 else:
-    from . import gltf_frames, rig_build, muscle_file, cli, runtime_lib, ui
+    from . import gltf_frames, runtime_lib, rig_build, muscle_file, cli, jiggle_play, ui
 
 import bpy  # noqa: E402
 

@@ -166,20 +166,38 @@ def _drive_skinned(armature, muscle, bone, origin_empty, insertion_empty, twist_
                       twist_reader, CURVE_X_FACTOR)
         fcurve = armature.animation_data.drivers.find(_bone_path(bone, prop))
         _set_curve(fcurve, [(key[0] * CURVE_X_FACTOR, key[column]) for key in keys])
-    # Equations 6-7: location (0, up, side), scale (1, s, s) in the bind frame's axes.
-    for path, index, expression, names in (("location", 1, "ru + tu", ("ratio_up", "twist_up")),
-                                           ("location", 2, "rs + ts", ("ratio_side", "twist_side")),
-                                           ("scale", 1, "rk + tk - 1", ("ratio_scale", "twist_scale")),
-                                           ("scale", 2, "rk + tk - 1", ("ratio_scale", "twist_scale"))):
+    # Equations 6-7: location (0, up, side), scale (1, s, s) in the bind frame's axes. A pose bone's
+    # location is in the armature's units: under an armature object scaled x100 (Cyberpunk's
+    # CharacterArmature) one unit of it is 100 scene metres, while up and side are metres (the
+    # extension's model-space units), so they are divided by the bone's rest scale in the scene.
+    up_scale, side_scale = (_rest_scale(armature, bone, axis) for axis in (1, 2))
+    for path, index, variables, expression in (
+            ("location", 1, (("ru", "ratio_up"), ("tu", "twist_up")), _over("ru + tu", up_scale)),
+            ("location", 2, (("rs", "ratio_side"), ("ts", "twist_side")), _over("rs + ts", side_scale)),
+            ("scale", 1, (("rk", "ratio_scale"), ("tk", "twist_scale")), "rk + tk - 1"),
+            ("scale", 2, (("rk", "ratio_scale"), ("tk", "twist_scale")), "rk + tk - 1")):
         driver = pose_bone.driver_add(path, index).driver
         driver.type = 'SCRIPTED'
-        short = expression.split()[0], expression.split()[2]
-        for var_name, channel in zip(short, names):
+        for var_name, channel in variables:
             _prop_var(driver, var_name, armature, _bone_path(bone, "rigbake_" + channel))
         driver.expression = expression
 
 
-def _helpers(armature, muscle, objects, origin_bone, origin_empty, insertion_empty, rest_worlds, collection):
+def _rest_scale(armature, bone, axis):
+    """How many scene metres one armature unit along the bone's rest `axis` is (its length through
+    the armature object's world matrix; 1 for an unscaled armature)."""
+    return (armature.matrix_world @ armature.data.bones[bone].matrix_local).col[axis].to_3d().length
+
+
+def _over(expression, scale):
+    """`expression` (metres) in armature units; left as it is when the armature is unscaled, so a
+    simple expression Blender evaluates without Python either way."""
+    if abs(scale - 1.0) <= 1e-6:
+        return expression
+    return "(%s) / %r" % (expression, scale)
+
+
+def _helpers(armature, muscle, objects, origin_bone, origin_empty, insertion_empty, binds, collection):
     base, tip, drive = (objects[node] for node in muscle["helperNodes"])
     helpers = json.loads(armature.get("rigbake_helpers", "{}"))
     helpers[muscle["name"]] = [base.name, tip.name, drive.name]
@@ -190,7 +208,17 @@ def _helpers(armature, muscle, objects, origin_bone, origin_empty, insertion_emp
         helper.animation_data_clear()
         for constraint in list(helper.constraints):
             helper.constraints.remove(constraint)
-    base_rest = gltf_frames.to_blender(rest_worlds[muscle["helperNodes"][0]])
+    # The base's rest is equation 9 at the bind pose, from the extension in double: [f0, u0, f0 x u0]
+    # at the origin locator. (The base node's own rest in the file is not used: under Cyberpunk's
+    # armature node, scaled x100, it is not that frame.)
+    origin_bind = binds[muscle["originNode"]]
+    fibre = _unit(origin_bind[:3, :3] @ numpy.array(muscle["fibreLocal"], dtype=float))
+    up = _unit(origin_bind[:3, :3] @ numpy.array(muscle["upLocal"], dtype=float))
+    up = _unit(up - numpy.dot(up, fibre) * fibre)
+    frame = numpy.identity(4)
+    frame[:3, :3] = numpy.column_stack([fibre, up, numpy.cross(fibre, up)])
+    frame[:3, 3] = (origin_bind @ numpy.append(muscle["originLocal"], 1.0))[:3]
+    base_rest = gltf_frames.to_blender(frame)
     _attach_to_bone(base, armature, origin_bone, base_rest)
     track = base.constraints.new('DAMPED_TRACK')
     track.target = insertion_empty
@@ -230,7 +258,6 @@ def build_from_import(gltf, muscles_path):
         return
     rig = extension
     binds = gltf_frames.bind_matrices(gltf)
-    rest_worlds, _ = gltf_frames.rest_worlds(gltf)
     vnodes = gltf.vnodes
 
     def bone_of(node):
@@ -242,13 +269,13 @@ def build_from_import(gltf, muscles_path):
         with open(bpy.path.abspath(muscles_path), encoding="utf-8") as stream:
             muscle_text = stream.read()
         muscle_file = json.loads(muscle_text)
-    build(armature, rig, binds, rest_worlds, bone_of, lambda node: vnodes[node].blender_object,
+    build(armature, rig, binds, bone_of, lambda node: vnodes[node].blender_object,
           gltf.import_settings["filepath"], muscle_file, muscle_text, muscles_path, len(gltf.data.nodes))
     # The NLA track of each glTF animation, by index (the importer names them; unnamed ones too).
     armature["rigbake_clips"] = [animation.track_name for animation in gltf.data.animations or []]
 
 
-def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, muscle_file, muscle_text, muscles_path,
+def build(armature, rig, binds, bone_of, object_of, source_path, muscle_file, muscle_text, muscles_path,
           node_count):
     scene = bpy.context.scene
     # Bind matrices of every joint by bone name, in double (JSON keeps every digit), for the export.
@@ -263,6 +290,14 @@ def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, mu
         armature["rigbake_muscles_text"] = text.name
         armature["rigbake_muscles_path"] = muscles_path
     file_locators = _muscle_file_locators(muscle_file)
+    # The file's rest pose (the glTF nodes' own TRS), as the importer set it on the pose bones before
+    # any clip played: a clip that does not key a joint leaves it where the last clip put it (Blender),
+    # where glTF leaves it at this rest; a caller puts the pose back to it between clips. It differs from
+    # the bones' rests (the bind pose) where the file's rest pose is not its bind pose (Cyberpunk's neck).
+    skinned_bones = {bone_of(m["skinnedNode"]) for m in rig["muscles"]}
+    armature["rigbake_rest_pose"] = json.dumps({
+        b.name: [b.matrix_basis[r][c] for r in range(4) for c in range(4)]
+        for b in armature.pose.bones if b.name not in skinned_bones})
 
     # The skinned bones' rests become their bind frames M_bind = B_c · K (edit mode), and their
     # channels belong to the drivers (a `both` bake also animates them).
@@ -282,7 +317,10 @@ def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, mu
         frame[:3, :3] = numpy.column_stack([_unit(bind[:3, c]) for c in range(3)])
         frame[:3, 3] = bind[:3, 3]
         edit_bone = armature.data.edit_bones[skinned[muscle["name"]]]
-        edit_bone.matrix = to_armature @ gltf_frames.to_blender(frame)
+        # An edit bone has no scale: under a scaled armature object the frame is given as the rotation
+        # it has in the armature's axes (its columns made unit) at its place there.
+        rest = to_armature @ gltf_frames.to_blender(frame)
+        edit_bone.matrix = Matrix.Translation(rest.translation) @ rest.to_3x3().normalized().to_4x4()
     bpy.ops.object.mode_set(mode='OBJECT')
     view_layer.objects.active = previous_active
 
@@ -331,7 +369,7 @@ def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, mu
         _drive_skinned(armature, muscle, skinned[name], empties["origin"], empties["insertion"], reader)
         if "helperNodes" in muscle:
             _helpers(armature, muscle, {n: object_of(n) for n in muscle["helperNodes"]}, origin_bone,
-                     empties["origin"], empties["insertion"], rest_worlds, collection)
+                     empties["origin"], empties["insertion"], binds, collection)
     # Per joint, the matrix taking its bone's frame to its node's (the importer turns bones to point
     # along Y; the skinned bones' frames are their nodes' now), for the runtime library's pose.
     bone_to_node = {}
@@ -340,5 +378,5 @@ def build(armature, rig, binds, rest_worlds, bone_of, object_of, source_path, mu
         if bone and bone in armature.data.bones:
             matrix = (armature.matrix_world @ armature.data.bones[bone].matrix_local).inverted() @ gltf_frames.to_blender(bind)
             bone_to_node[str(node)] = [bone, [matrix[r][c] for r in range(4) for c in range(4)]]
-    from . import runtime_lib
-    runtime_lib.attach(armature, rig, bone_to_node, node_count)
+    from . import jiggle_play
+    jiggle_play.attach(armature, rig, bone_to_node, node_count, collection)

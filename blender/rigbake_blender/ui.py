@@ -5,7 +5,7 @@ import os
 import bpy
 from bpy.props import FloatProperty, StringProperty
 
-from . import cli, muscle_file, runtime_lib
+from . import cli, jiggle_play, muscle_file
 
 
 class RigbakePreferences(bpy.types.AddonPreferences):
@@ -144,8 +144,8 @@ class RIGBAKE_OT_bake_jiggles(bpy.types.Operator):
             self.report({'ERROR'}, "BLENDER_NO_RIG: select the armature of an imported rigbake bake")
             return {'CANCELLED'}
         try:
-            keys = runtime_lib.bake_jiggles(context, armature)
-        except (runtime_lib.RuntimeMissing, RuntimeError) as error:
+            keys = jiggle_play.bake_jiggles(context, armature)
+        except (jiggle_play.RuntimeMissing, RuntimeError) as error:
             self.report({'ERROR'}, str(error))
             return {'CANCELLED'}
         self.report({'INFO'}, "keyed %d jiggle rotations" % keys)
@@ -175,7 +175,7 @@ class RIGBAKE_PT_panel(bpy.types.Panel):
         row.operator("rigbake.export_muscles")
         row.operator("rigbake.mirror")
         row = layout.row()
-        row.label(text=runtime_lib.status(armature))
+        row.label(text=jiggle_play.status(armature))
         if armature.get("rigbake_jiggles", 0):
             row.operator("rigbake.bake_jiggles")
         box = layout.box()
@@ -209,11 +209,11 @@ def register():
     scene.rigbake_import_muscles = StringProperty(
         name="Muscle file for import", subtype='FILE_PATH',
         description="The muscle JSON a glTF import of a bake attaches to its rig (needed to export it back)")
-    runtime_lib.register()
+    jiggle_play.register()
 
 
 def unregister():
-    runtime_lib.unregister()
+    jiggle_play.unregister()
     for name in ("rigbake_character", "rigbake_muscles", "rigbake_baked", "rigbake_import_muscles"):
         delattr(bpy.types.Scene, name)
     for cls in reversed(CLASSES):
