@@ -308,3 +308,43 @@ TEST_CASE("cli bake --vrm: a version the input cannot become is one VRM_CONVERSI
     CHECK_FALSE(std::filesystem::exists(output));
   }
 }
+
+TEST_CASE("cli bake --vrm: a version the input has is kept, the conversion is byte-identical at any thread count") {
+  test::TempDir dir;
+  const std::string vrm0 = vt::sampleVrm0WithSprings(dir);
+  const std::string vrm1 = dir / "sample1.vrm";
+  REQUIRE(runCli("sample --vrm 1 -o " + ext::shellQuote(vrm1)).exit_code == 0);
+  auto bake = [&](const std::string& input, const std::string& flags, const std::string& output) {
+    test::CliResult run = runCli("bake " + ext::shellQuote(input) + " --influences 4 --response keep " + flags + " -o " +
+                                 ext::shellQuote(dir / output));
+    INFO(run.err);
+    REQUIRE(run.exit_code == 0);
+    return run.err;
+  };
+  const std::string kept0 = bake(vrm0, "--vrm 0", "kept0.vrm");
+  CHECK(kept0.find("converted VRM 0.x") == std::string::npos);
+  CHECK(test::glbJson(slurp(dir / "kept0.vrm"))["extensions"].contains("VRM"));
+  const std::string kept1 = bake(vrm1, "--vrm 1", "kept1.vrm");
+  CHECK(kept1.find("converted VRM 0.x") == std::string::npos);
+  CHECK(test::glbJson(slurp(dir / "kept1.vrm"))["extensions"]["VRMC_vrm"]["specVersion"] == "1.0");
+  bake(vrm0, "--vrm 1 --helper-joints --threads 1", "one.vrm");
+  bake(vrm0, "--vrm 1 --helper-joints --threads 2", "two.vrm");
+  CHECK(slurp(dir / "one.vrm") == slurp(dir / "two.vrm"));
+}
+
+TEST_CASE("cli bake --vrm 1: a malformed VRM 0.x spring names where, and writes nothing") {
+  test::TempDir dir;
+  const std::string good = vt::sampleVrm0WithSprings(dir);
+  const std::string bytes = slurp(good);
+  nlohmann::json json = test::glbJson(bytes);
+  json["extensions"]["VRM"]["secondaryAnimation"]["boneGroups"][1]["bones"][0] = 9999;
+  const std::string bad = dir / "bad0.vrm";
+  std::ofstream(bad, std::ios::binary) << vt::withJson(bytes, json);
+  const std::string output = dir / "out.vrm";
+  test::CliResult run = runCli("bake " + ext::shellQuote(bad) + " --vrm 1 -o " + ext::shellQuote(output));
+  INFO(run.err);
+  CHECK(run.exit_code == 3);
+  CHECK(run.err.rfind("GLTF_PARSE_FAILED " + bad + "#/extensions/VRM/secondaryAnimation/boneGroups/1/bones/0: ", 0) == 0);
+  CHECK(test::lineCount(run.err) == 1);
+  CHECK_FALSE(std::filesystem::exists(output));
+}
