@@ -309,7 +309,7 @@ TEST_CASE("cli bake --vrm: a version the input cannot become is one VRM_CONVERSI
   }
 }
 
-TEST_CASE("cli bake --vrm: a version the input has is kept, the conversion is byte-identical at any thread count") {
+TEST_CASE("cli bake --vrm: a version the input has is kept, a conversion with jiggles is byte-identical at any thread count") {
   test::TempDir dir;
   const std::string vrm0 = vt::sampleVrm0WithSprings(dir);
   const std::string vrm1 = dir / "sample1.vrm";
@@ -327,9 +327,14 @@ TEST_CASE("cli bake --vrm: a version the input has is kept, the conversion is by
   const std::string kept1 = bake(vrm1, "--vrm 1", "kept1.vrm");
   CHECK(kept1.find("converted VRM 0.x") == std::string::npos);
   CHECK(test::glbJson(slurp(dir / "kept1.vrm"))["extensions"]["VRMC_vrm"]["specVersion"] == "1.0");
-  bake(vrm0, "--vrm 1 --helper-joints --threads 1", "one.vrm");
-  bake(vrm0, "--vrm 1 --helper-joints --threads 2", "two.vrm");
+  // With --jiggle, the jiggles' springs join the 7 converted ones.
+  bake(vrm0, "--vrm 1 --helper-joints --jiggle biceps --threads 1", "one.vrm");
+  bake(vrm0, "--vrm 1 --helper-joints --jiggle biceps --threads 2", "two.vrm");
   CHECK(slurp(dir / "one.vrm") == slurp(dir / "two.vrm"));
+  const nlohmann::json springs = test::glbJson(slurp(dir / "one.vrm"))["extensions"]["VRMC_springBone"]["springs"];
+  REQUIRE(springs.size() == 9);
+  CHECK(springs[7]["name"] == "LeftBicep_muscleSkinned");
+  CHECK(springs[8]["name"] == "RightBicep_muscleSkinned");
 }
 
 TEST_CASE("cli bake --vrm 1: a malformed VRM 0.x spring names where, and writes nothing") {
