@@ -9,9 +9,10 @@
 // MigrationVrmMeta, MigrationVrmSpringBone, MigrateVector3) where it has one:
 // - 0.x stored its vectors (collider offsets, gravityDir, firstPersonBoneOffset) in Unity's
 //   left-handed axes, while its nodes are in glTF's with Z negated; VRM 1.0 stores glTF axes of a
-//   model facing +Z. Here the model is turned by a new root node, not by rewriting its nodes, so a
-//   node-local offset (collider) becomes (x, y, -z) (three-vrm reads 0.x offsets so) and a model-space
-//   direction (gravity, the look-at offset) (-x, y, z), as UniVRM's MigrateVector3.
+//   model facing +Z. Here the model is turned by a new root node, not by rewriting its nodes, so an
+//   offset in a node's frame (a collider's; the look-at offset, which 1.0 puts in the head's frame)
+//   becomes (x, y, -z) (three-vrm reads 0.x collider offsets so) and a model-space direction (gravity)
+//   (-x, y, z), as UniVRM's MigrateVector3 (UniVRM turns the nodes' frames as well, hence one rule).
 // - Springs: in 0.x every descendant of a listed bone swings, each toward its first child. Each bone's
 //   chain follows first children down to a leaf, which gets a 7 cm tail node along its bone (0.x added
 //   that tail implicitly; 1.0 does not). Every other child starts a chain of its own, so every
@@ -217,7 +218,7 @@ Json convertFirstPerson(Context* context, const Json& first_person) {
 // 0.x look-at maps carry a curve; 1.0's range maps are linear (inputMaxValue = xRange, outputScale = yRange).
 Json convertLookAt(const Json& first_person) {
   Json look_at = {{"type", text(first_person, "lookAtTypeName") == "BlendShape" ? "expression" : "bone"},
-                  {"offsetFromHeadBone", array3(modelFromUnity(vector3(first_person, "firstPersonBoneOffset", Eigen::Vector3d::Zero())))}};
+                  {"offsetFromHeadBone", array3(nodeLocalFromUnity(vector3(first_person, "firstPersonBoneOffset", Eigen::Vector3d::Zero())))}};
   const std::pair<const char*, const char*> maps[] = {{"lookAtHorizontalInner", "rangeMapHorizontalInner"},
                                                       {"lookAtHorizontalOuter", "rangeMapHorizontalOuter"},
                                                       {"lookAtVerticalDown", "rangeMapVerticalDown"},

@@ -69,6 +69,8 @@ std::string sampleVrm0WithSprings(const test::TempDir& dir) {
   auto sphere = [](double x, double y, double z, double radius) {
     return nlohmann::json{{"offset", {{"x", x}, {"y", y}, {"z", z}}}, {"radius", radius}};
   };
+  // A look-at origin off the head's axis, to see the 0.x (Unity-axes) offset turned.
+  vrm["firstPerson"]["firstPersonBoneOffset"] = {{"x", 0.01}, {"y", 0.06}, {"z", 0.02}};
   vrm["secondaryAnimation"] = {
       {"colliderGroups",
        {{{"node", humanNode(vrm, "head")}, {"colliders", {sphere(0.0, 0.08, 0.01, 0.1)}}},
@@ -202,6 +204,8 @@ TEST_CASE("cli bake --vrm 1: a VRM 0.x avatar becomes a VRM 1.0 with its humanoi
   // firstPerson names the body's node instead of its mesh; lookAt keeps the 0.x ranges.
   REQUIRE(vrm1["firstPerson"]["meshAnnotations"].size() == 1);
   CHECK(gltf["nodes"][vrm1["firstPerson"]["meshAnnotations"][0]["node"].get<int>()]["mesh"] == 0);
+  CHECK(vrm1["lookAt"]["offsetFromHeadBone"] == nlohmann::json::array({0.01, 0.06, -0.02}));  // in the head's frame
+  CHECK(vrm1["lookAt"]["type"] == "bone");
   CHECK(vrm1["lookAt"]["rangeMapHorizontalOuter"]["inputMaxValue"] == 90.0);
   CHECK(vrm1["lookAt"]["rangeMapHorizontalOuter"]["outputScale"] == 10.0);
 
