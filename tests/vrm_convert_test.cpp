@@ -357,3 +357,28 @@ TEST_CASE("cli bake --vrm 1: a malformed VRM 0.x spring names where, and writes 
   CHECK(test::lineCount(run.err) == 1);
   CHECK_FALSE(std::filesystem::exists(output));
 }
+
+TEST_CASE("cli build: a manifest character with \"vrm\": 1 is built from its VRM 0.x as a VRM 1.0, validated") {
+  test::TempDir dir;
+  vt::sampleVrm0WithSprings(dir);  // springs0.vrm beside the manifest
+  const nlohmann::json manifest = {
+      {"influences", 4}, {"response", "keep"}, {"helper_joints", true}, {"out", "out"},
+      {"characters", {{{"name", "avatar"}, {"input", "springs0.vrm"}, {"vrm", 1}}}}};
+  std::ofstream(dir / "manifest.json") << manifest.dump(2);
+  test::CliResult run = runCli("build " + ext::shellQuote(dir / "manifest.json") + " -j 1 --progress never");
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json summary = nlohmann::json::parse(slurp(dir / "out/summary.json"));
+  CHECK(summary["counts"]["built"] == 1);
+  CHECK(summary["counts"]["failed"] == 0);
+  const nlohmann::json converted = test::glbJson(slurp(dir / "out/avatar/avatar.glb"));
+  CHECK(converted["extensions"]["VRMC_vrm"]["specVersion"] == "1.0");
+  CHECK(converted["extensions"]["VRMC_springBone"]["springs"].size() == 7);
+  CHECK(converted["extensions"].count("VRM") == 0);
+  // An impossible version fails that character alone, with the code.
+  std::ofstream(dir / "bad.json") << nlohmann::json{{"out", "bad"}, {"characters", {{{"name", "plain"}, {"input", test::sampleGlbPathForCli()}, {"vrm", 1}}}}}.dump();
+  test::CliResult bad = runCli("build " + ext::shellQuote(dir / "bad.json") + " -j 1 --progress never");
+  INFO(bad.err);
+  CHECK(bad.exit_code == 1);
+  CHECK(bad.err.find("VRM_CONVERSION_UNSUPPORTED") != std::string::npos);
+}
