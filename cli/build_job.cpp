@@ -54,9 +54,12 @@ struct Loaded {
   LandmarkSet landmarks;
 };
 
-Loaded loadResolved(const std::string& path, const SharedPresets& presets) {
+// `vrm`: the character's "vrm" (-1 as the file is, 0 or 1 as bake --vrm).
+Loaded loadResolved(const std::string& path, const SharedPresets& presets, int vrm) {
+  LoadOptions options;
+  if (vrm >= 0) options.vrm = vrm == 1 ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
   Loaded loaded;
-  loaded.character = loadCharacter(path);
+  loaded.character = loadCharacter(path, options);
   LandmarkInputs inputs;
   inputs.maps = &presets.maps;
   inputs.rules = &presets.rules;
@@ -80,6 +83,7 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
                                 gltfWeightsName(character.gltf_weights) + " muscles_from " + character.muscles_from +
                                 (character.rom.empty() ? std::string() : " rom") + " muscle_motion " +
                                 muscleMotionName(character.muscle_motion) + (character.helper_joints ? " helper_joints" : "") +
+                                (character.vrm >= 0 ? " vrm " + std::to_string(character.vrm) : std::string()) +
                                 " response " + responseModeName(character.response));
 }
 
@@ -180,7 +184,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     createDirectories(out.directory);
     removeStamp(out);
     MusclePreset preset = readMusclePreset(character.preset);
-    Loaded loaded = loadResolved(character.input, presets);
+    Loaded loaded = loadResolved(character.input, presets, character.vrm);
     const Character& body = loaded.character.character;
     MuscleSet muscles;
     if (!character.muscles.empty()) {
@@ -188,7 +192,7 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     } else if (!character.muscles_from.empty()) {
       const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
       const std::string source_muscles_path = characterOutputs(manifest, source).muscles;
-      Loaded from = loadResolved(source.input, presets);
+      Loaded from = loadResolved(source.input, presets, source.vrm);
       MuscleSet source_muscles =
           readMuscleJson(source_muscles_path, from.character.character, from.landmarks, preset);
       muscles = retargetMuscles(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks, preset,

@@ -40,6 +40,7 @@ struct BakeCommandOptions {
   std::string hits;
   std::string rom;  // ROM preset to measure on (--rom), empty: none
   bool springs_only = false;
+  std::string vrm;  // --vrm: "0", "1" or empty (as the input is)
   int influences = 4;
   std::string gltf_weights = "milli";
   std::string regions = "body";
@@ -128,7 +129,9 @@ int run(const BakeCommandOptions& options) {
   ProgressLine progress("rigbake bake", options.progress);
   progress.show("loading the character");
   MusclePreset preset = loadMusclePreset(options.presets, options.preset);
-  ResolvedCharacter resolved = loadAndResolve(options.character, options.presets);
+  LoadOptions load;
+  if (!options.vrm.empty()) load.vrm = options.vrm == "1" ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
+  ResolvedCharacter resolved = loadAndResolve(options.character, options.presets, load);
   // --rom: the range-of-motion clips join the character's own in memory only, so the weight rounding and
   // the deformation figures see them, but the written file does not hold them (docs/rom.md).
   RomPreset rom_preset;  // outlives `rom`, whose clips point at their specs in it
@@ -380,6 +383,11 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   command->add_flag("--vrm-springs-only", options->springs_only,
                     "VRM only: export the --jiggle joints as spring bones for the runtime to simulate, and do not "
                     "also bake them into the clips");
+  command->add_option("--vrm", options->vrm,
+                      "VRM version to write: 1 converts a VRM 0.x avatar to VRM 1.0 (humanoid, meta, spring bones and "
+                      "colliders; turned to face +Z; the helper joints' VRMC_node_constraint with --helper-joints); 0 keeps "
+                      "a VRM 0.x. Default: as the input is. docs/extensions.md says what is converted and what is lost")
+      ->check(CLI::IsMember({"0", "1"}));
   addPresetOptions(command, &options->presets);
   command->add_flag("--json", options->json, "Print the figures as JSON on stdout");
   addProgressOption(command, &options->progress);

@@ -97,7 +97,7 @@ nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton) {
   return {{"clips", clips}, {"skipped", skipped}};
 }
 
-ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options) {
+ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load) {
   const std::string dir = presetsDirectory(options);
   std::vector<NamingMap> maps = readNamingMaps(dir + "/skeletons");
   LandmarkRules rules = readLandmarkRules(dir + "/landmarks.json");
@@ -121,8 +121,9 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
     inputs.forced_map = &forced;
   }
   ResolvedCharacter resolved;
-  resolved.loaded = loadCharacter(path);
-  // What an FBX conversion left out (formats/fbx_to_gltf.h); a glTF input has no notes.
+  resolved.loaded = loadCharacter(path, load);
+  // What an FBX or a VRM 0.x -> 1.0 conversion did and left out (formats/fbx_to_gltf.h,
+  // formats/vrm0_to_vrm1.h); a glTF input loaded as it is has no notes.
   for (const std::string& note : resolved.loaded.notes) std::cerr << printableLine("note " + path + ": " + note) << "\n";
   resolved.landmarks = resolveLandmarks(resolved.loaded.character, inputs);
   return resolved;

@@ -54,7 +54,7 @@ struct ResolvedCharacter {
   LandmarkSet landmarks;
 };
 
-ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options);
+ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load = {});
 
 // "a/b/hero.glb" -> "hero.glb": outputs name inputs without directories so they do not depend on
 // where the tool ran.

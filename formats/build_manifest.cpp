@@ -65,8 +65,8 @@ void checkNameText(const JsonReader& value, const std::string& name) {
 BuildManifest readBuildManifest(const std::string& path, const std::string& default_preset_dir) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", errc::MANIFEST_INVALID);
-  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "out",
-                "characters"});
+  in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "vrm",
+                "out", "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -115,6 +115,12 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   if (in.has("muscle_motion")) manifest.muscle_motion = motionOf(in.at("muscle_motion"));
   if (in.has("helper_joints")) manifest.helper_joints = in.at("helper_joints").asBool();
   if (in.has("response")) manifest.response = responseOf(in.at("response"));
+  auto vrmOf = [](const JsonReader& value) {
+    const int version = value.asInt();
+    if (version != 0 && version != 1) value.fail("must be 0 or 1 (the VRM version to write, as rigbake bake --vrm)");
+    return version;
+  };
+  if (in.has("vrm")) manifest.vrm = vrmOf(in.at("vrm"));
   auto outOf = [](const JsonReader& value) {
     std::string out = value.asString();
     if (out.empty()) value.fail("must name the output folder (it is empty)");
@@ -127,7 +133,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   for (size_t i = 0; i < characters.arraySize(); ++i) {
     JsonReader item = characters.at(i);
     item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom",
-                    "muscle_motion", "helper_joints", "response"});
+                    "muscle_motion", "helper_joints", "response", "vrm"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -151,6 +157,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.muscle_motion = item.has("muscle_motion") ? motionOf(item.at("muscle_motion")) : manifest.muscle_motion;
     c.helper_joints = item.has("helper_joints") ? item.at("helper_joints").asBool() : manifest.helper_joints;
     c.response = item.has("response") ? responseOf(item.at("response")) : manifest.response;
+    c.vrm = item.has("vrm") ? vrmOf(item.at("vrm")) : manifest.vrm;
     manifest.characters.push_back(std::move(c));
   }
   buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work

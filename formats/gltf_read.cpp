@@ -20,6 +20,7 @@
 #include "formats/gltf_document.h"
 #include "formats/gltf_extensions.h"
 #include "formats/fbx_to_gltf.h"
+#include "formats/vrm0_to_vrm1.h"
 
 namespace rigbake {
 
@@ -493,13 +494,27 @@ LoadedCharacter characterOf(std::shared_ptr<GltfDocument> document, const std::s
   return loaded;
 }
 
+// Makes the model the VRM version asked for (LoadOptions), returning what the conversion says.
+std::vector<std::string> applyVrmTarget(tinygltf::Model* model, VrmTarget target, const std::string& path) {
+  if (target == VrmTarget::kAsIs) return {};
+  const bool vrm0 = model->extensions.count("VRM") > 0, vrm1 = model->extensions.count("VRMC_vrm") > 0;
+  const char* flag = target == VrmTarget::kVrm1 ? "--vrm 1" : "--vrm 0";
+  if (!vrm0 && !vrm1)
+    fail(errc::VRM_CONVERSION_UNSUPPORTED, path, std::string("is not a VRM (no VRM or VRMC_vrm extension), so ") + flag + " has no avatar to convert");
+  if (target == VrmTarget::kVrm0 && vrm1)
+    fail(errc::VRM_CONVERSION_UNSUPPORTED, path, "is a VRM 1.0; rigbake converts VRM 0.x to 1.0 (--vrm 1), not back to 0.x");
+  if (target == VrmTarget::kVrm1 && vrm0 && !vrm1) return convertVrm0ToVrm1(model, path);
+  return {};
+}
+
 }  // namespace
 
-LoadedCharacter loadCharacter(const std::string& path) {
+LoadedCharacter loadCharacter(const std::string& path, const LoadOptions& options) {
   if (isFbxPath(path)) {
     auto document = std::make_shared<GltfDocument>();
     FbxConversion conversion = convertFbxToGltf(path, &document->model);
     shrinkModelLists(&document->model);
+    applyVrmTarget(&document->model, options.vrm, path);  // an FBX is no VRM: refused
     LoadedCharacter loaded = characterOf(std::move(document), path);
     loaded.notes = std::move(conversion.notes);
     return loaded;
@@ -533,7 +548,10 @@ LoadedCharacter loadCharacter(const std::string& path) {
   requireHonouredExtensions(document->model.extensionsRequired, path);
   decompressGltf(&document->model, path);
   shrinkModelLists(&document->model);
-  return characterOf(std::move(document), path);
+  std::vector<std::string> notes = applyVrmTarget(&document->model, options.vrm, path);
+  LoadedCharacter loaded = characterOf(std::move(document), path);
+  loaded.notes = std::move(notes);
+  return loaded;
 }
 
 }  // namespace rigbake

@@ -1,5 +1,6 @@
 // Fuzz target: the character loader (glTF JSON, GLB and VRM bytes; the loader tells them apart by
-// content) and the landmark resolution every command runs on a loaded character.
+// content) and the landmark resolution every command runs on a loaded character; a VRM 0.x is also
+// converted to VRM 1.0 as `bake --vrm 1` does.
 #include <cstddef>
 #include <cstdint>
 
@@ -26,6 +27,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     inputs.maps = &presets.maps;
     inputs.rules = &presets.rules;
     rigbake::resolveLandmarks(loaded.character, inputs);
+    // A VRM 0.x also goes through `bake --vrm 1`'s conversion (formats/vrm0_to_vrm1.cpp).
+    if (loaded.character.vrm_version == "0.x") {
+      rigbake::LoadOptions vrm1;
+      vrm1.vrm = rigbake::VrmTarget::kVrm1;
+      rigbake::resolveLandmarks(rigbake::loadCharacter(path, vrm1).character, inputs);
+    }
   });
   return 0;
 }

@@ -23,6 +23,7 @@ struct BuildCharacter {
   MuscleMotion muscle_motion = MuscleMotion::kRuntime;
   bool helper_joints = false;
   ResponseMode response = ResponseMode::kAuto;
+  int vrm = -1;              // "vrm": VRM version to write (0 or 1, as rigbake bake --vrm), -1 as the input is
   std::string pointer;       // JSON pointer in the manifest, for messages
 };
 
@@ -36,6 +37,7 @@ struct BuildManifest {
   MuscleMotion muscle_motion = MuscleMotion::kRuntime;
   bool helper_joints = false;
   ResponseMode response = ResponseMode::kAuto;
+  int vrm = -1;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;
 };

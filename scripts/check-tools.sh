@@ -132,6 +132,10 @@ else
        ! grep -q EXT_meshopt_compression "$work/triangle-optimized.glb"; then
     missing "gltf-transform optimize --config gltf-transform/rigbake.config.mjs fails: $( (grep -m 1 'rror' "$work/gltf-transform.log" || tail -n 1 "$work/gltf-transform.log") | cut -c 1-200) (run scripts/install-gltf-transform.sh)"
   fi
+  # three-vrm's bundle, which tests/vrm_convert_test.cpp loads into headless Chromium.
+  if [ ! -s "$repo/.tools/three-vrm-check/three-vrm-check.js" ]; then
+    missing "the three-vrm check bundle .tools/three-vrm-check/three-vrm-check.js is missing (run scripts/install-three-vrm-check.sh)"
+  fi
 fi
 
 # gltfpack: writes an EXT_meshopt_compression copy of the triangle.

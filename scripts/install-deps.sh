@@ -30,5 +30,7 @@ fi
 bash "$repo/scripts/install-validator.sh"
 bash "$repo/scripts/install-gltf-transform.sh"
 bash "$repo/scripts/install-player.sh"
+# three-vrm 3.x for tests/vrm_convert_test.cpp (a VRM 0.x -> 1.0 bake played in headless Chromium).
+bash "$repo/scripts/install-three-vrm-check.sh"
 # rigbake's Blender add-on, installed and enabled in the Blender on PATH (docs/blender.md).
 bash "$repo/scripts/install-blender-addon.sh"

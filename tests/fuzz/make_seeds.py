@@ -68,6 +68,32 @@ def with_vrm(packed, original, target):
     write_glb(target, document, binary)
 
 
+def with_springs(source, target):
+    """`source` (a VRM 0.x) with a secondaryAnimation of UniVRM's shape (as tests/vrm_convert_test.cpp
+    adds): spring chains from the toes and the branching left shoulder, sphere colliders on the head and
+    hands, for the VRM 0.x -> 1.0 conversion."""
+    document, binary = read_glb(source)
+    vrm = document["extensions"]["VRM"]
+    bone = {entry["bone"]: entry["node"] for entry in vrm["humanoid"]["humanBones"]}
+
+    def sphere(x, y, z, radius):
+        return {"offset": {"x": x, "y": y, "z": z}, "radius": radius}
+
+    vrm["secondaryAnimation"] = {
+        "colliderGroups": [
+            {"node": bone["head"], "colliders": [sphere(0, 0.08, 0.01, 0.1)]},
+            {"node": bone["leftHand"], "colliders": [sphere(0, 0, 0, 0.05), sphere(-0.05, 0, 0, 0.04)]},
+            {"node": bone["rightHand"], "colliders": [sphere(0.05, 0.01, 0.02, 0.04)]}],
+        "boneGroups": [
+            {"comment": "toes", "stiffiness": 1.5, "gravityPower": 0.5, "gravityDir": {"x": 0.3, "y": -1, "z": 0.2},
+             "dragForce": 0.4, "center": -1, "hitRadius": 0.02, "bones": [bone["leftToes"], bone["rightToes"]],
+             "colliderGroups": [0]},
+            {"comment": "left shoulder", "stiffiness": 2.0, "gravityPower": 0, "gravityDir": {"x": 0, "y": -1, "z": 0},
+             "dragForce": 0.7, "center": bone["hips"], "hitRadius": 0.03, "bones": [bone["leftShoulder"]],
+             "colliderGroups": [0, 2]}]}
+    write_glb(target, document, binary)
+
+
 def main():
     rigbake = os.path.abspath(sys.argv[1])
     characters = os.path.join(HERE, "character")
@@ -95,6 +121,7 @@ def main():
             os.link(vrm, as_glb)
             gltfpack(as_glb, packed, "-noq")
             with_vrm(packed, vrm, os.path.join(characters, "vrm" + version + ".vrm"))
+        with_springs(os.path.join(characters, "vrm0.vrm"), os.path.join(characters, "vrm0_springs.vrm"))
         # The whole file is 35 KB; the arms' parts (both sides) keep every kind of field at a tenth of it.
         placed = os.path.join(work, "placed.json")
         run("place", os.path.join(characters, "mannequin.glb"), "-o", placed)
