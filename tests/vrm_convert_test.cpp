@@ -379,6 +379,6 @@ TEST_CASE("cli build: a manifest character with \"vrm\": 1 is built from its VRM
   std::ofstream(dir / "bad.json") << nlohmann::json{{"out", "bad"}, {"characters", {{{"name", "plain"}, {"input", test::sampleGlbPathForCli()}, {"vrm", 1}}}}}.dump();
   test::CliResult bad = runCli("build " + ext::shellQuote(dir / "bad.json") + " -j 1 --progress never");
   INFO(bad.err);
-  CHECK(bad.exit_code == 1);
+  CHECK(bad.exit_code == 4);
   CHECK(bad.err.find("VRM_CONVERSION_UNSUPPORTED") != std::string::npos);
 }
