@@ -291,7 +291,8 @@ int run(const BakeCommandOptions& options) {
                         : bake.motion == MuscleMotion::kBoth    ? "baked into every clip, and in the RIGBAKE_muscle_rig extension"
                                                                 : "baked into every clip";
     std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size() << " hits, " << where
-              << (vrm_springs ? "; exported as VRM spring bones" : "") << "\n";
+              << (vrm_springs ? "; exported as VRM spring bones, without their cones (VRM springs have none; docs/jiggle.md)" : "")
+              << "\n";
   }
   if (file.vrm_constrained_muscles > 0) {
     std::cerr << "VRM 1.0: the base and tip joints of " << file.vrm_constrained_muscles

@@ -120,7 +120,11 @@ tinygltf::Model bakedModelAndNodes(const GltfDocument& document, const Character
     node.name = joint.name;
     node.translation = vec(joint.rest_local.translation);
     node.rotation = quat(joint.rest_local.rotation.normalized());
-    if (joint.role == MuscleJointRole::kSkinned) node.scale = vec(joint.rest_local.scale);
+    // A helper (base, tip, driver) is an unscaled frame, but under a scaled armature node (Quaternius
+    // Cyberpunk's x100) its local transform must undo that scale, or its rest world in the file is
+    // scaled too (found by the Blender add-on's test). Elsewhere its scale is 1 and is left out.
+    const bool scaled = (joint.rest_local.scale - Eigen::Vector3d::Ones()).cwiseAbs().maxCoeff() > 1e-6;
+    if (joint.role == MuscleJointRole::kSkinned || scaled) node.scale = vec(joint.rest_local.scale);
     const MusclePart& part = bake.muscles.parts[joint.muscle];
     static const char* kRoleNames[] = {"base", "tip", "driver", "skinned"};
     tinygltf::Value::Object description;

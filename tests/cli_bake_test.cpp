@@ -1,5 +1,6 @@
 // `rigbake bake` from the command line: figures in --stats, the packed raw file, determinism, and
 // bad input refused with a stable code and no output.
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "cli_support.h"
@@ -316,4 +317,52 @@ TEST_CASE("cli bake: a character without clips says it measured nothing, and the
   }
   CHECK(skinned == stats["joints_added"].get<int>());
   CHECK(helpers == 0);
+}
+
+namespace {
+
+// The world transform of node `index` at the file's rest (its TRS and its ancestors').
+Eigen::Affine3d restWorldOf(const nlohmann::json& gltf, int index) {
+  std::vector<int> parent(gltf["nodes"].size(), -1);
+  for (size_t n = 0; n < gltf["nodes"].size(); ++n)
+    for (const auto& child : gltf["nodes"][n].value("children", nlohmann::json::array())) parent[child.get<int>()] = static_cast<int>(n);
+  Eigen::Affine3d world = Eigen::Affine3d::Identity();
+  for (int n = index; n >= 0; n = parent[n]) {
+    const nlohmann::json& node = gltf["nodes"][n];
+    const auto t = node.value("translation", std::vector<double>{0, 0, 0});
+    const auto r = node.value("rotation", std::vector<double>{0, 0, 0, 1});
+    const auto s = node.value("scale", std::vector<double>{1, 1, 1});
+    Eigen::Affine3d local = Eigen::Translation3d(t[0], t[1], t[2]) * Eigen::Quaterniond(r[3], r[0], r[1], r[2]).normalized() *
+                            Eigen::Scaling(s[0], s[1], s[2]);
+    world = local * world;
+  }
+  return world;
+}
+
+}  // namespace
+
+TEST_CASE("cli bake --helper-joints under a scaled armature: the helpers' rest frames in the file are unscaled") {
+  // Quaternius Cyberpunk's armature node scales x100; a helper (base, tip, driver) is an unscaled frame.
+  const std::string cyberpunk = requireAsset("Quaternius_Cyberpunk_Character.glb");
+  if (cyberpunk.empty()) return;
+  TempDir dir;
+  const CliResult r = runCli("bake " + cyberpunk + " --helper-joints -o " + (dir / "c.glb"));
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const nlohmann::json gltf = glbJson(slurp(dir / "c.glb"));
+  int helpers = 0, skinned = 0;
+  double worst = 0.0;
+  for (size_t n = 0; n < gltf["nodes"].size(); ++n) {
+    const std::string name = gltf["nodes"][n].value("name", "");
+    skinned += name.find("_muscleSkinned") != std::string::npos;
+    if (name.find("_muscleBase") == std::string::npos && name.find("_muscleTip") == std::string::npos &&
+        name.find("_muscleDriver") == std::string::npos)
+      continue;
+    ++helpers;
+    const Eigen::Matrix3d frame = restWorldOf(gltf, static_cast<int>(n)).linear();
+    worst = std::max(worst, (frame.transpose() * frame - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff());
+  }
+  CHECK(skinned > 30);
+  CHECK(helpers == 3 * skinned);
+  CHECK(worst < 1e-5);
 }
