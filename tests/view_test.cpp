@@ -605,7 +605,8 @@ TEST_CASE("rigbake view: the page plays every clip of the mannequin in every mod
   // only the forearms), keyed at 30 per second.
   const nlohmann::json rigger = checkRiggerTools(run, 1.0 / 30.0);
   CHECK(rigger["defaultClip"] == "ArmRaise");
-  CHECK(rigger["joint_options"].get<int>() == 1 + 38 + 30);  // whole character, 38 muscle joints, 30 skeleton joints
+  CHECK(rigger["joint_options"].get<int>() == 1 + 38 + 30);
+  CHECK(std::abs(rigger["character_height"].get<double>() - 1.80) < 0.01);  // the mannequin's skin: soles at 0, crown at 1.80 m  // whole character, 38 muscle joints, 30 skeleton joints
   std::printf("view page rigger: default %s, scrub moved %.3f m, step %.6f s, camera target %.2g m (F followed %.3f m), grid y %.3g m "
               "(skin's lowest %.3g m, %.2f m across), panel %s\n",
               rigger["defaultClip"].get<std::string>().c_str(), rigger["moved_m"].get<double>(), rigger["next_dt"].get<double>(),

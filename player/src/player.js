@@ -397,7 +397,17 @@ export class RigbakePlayer {
     if (box.isEmpty()) box.set(new THREE.Vector3(-1, 0, -1), new THREE.Vector3(1, 2, 1));
     const center = box.getCenter(new THREE.Vector3());
     const size = box.getSize(new THREE.Vector3());
-    this.characterHeight = size.y > 0 ? size.y : Math.max(size.x, size.z, 1);
+    // The character's height from its skin at bind (T- or A-pose, standing: the geometry as stored, placed
+    // by the mesh's world matrix, where three draws it when every bone matrix is the identity), not from
+    // the pose the page opened on, which may crouch or roll; the pose's box when there is no skin.
+    const bind = new THREE.Box3();
+    for (const state of this.skinnedMeshes) {
+      const geometry = state.mesh.geometry;
+      if (!geometry.boundingBox) geometry.computeBoundingBox();
+      bind.union(geometry.boundingBox.clone().applyMatrix4(state.mesh.matrixWorld));
+    }
+    const height = bind.isEmpty() ? size.y : bind.max.y - bind.min.y;
+    this.characterHeight = height > 0 ? height : Math.max(size.x, size.z, 1);
     this.selectedJoint = null;
     if (!this.grid) this.addFloorGrid(box); // once, at the pose the page opened with
     const radius = Math.max(size.x, size.y, size.z) * 0.5;
