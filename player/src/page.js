@@ -128,8 +128,8 @@ function buildControls(panel, player, title) {
   const info = element('p', { id: 'rb-info', class: 'info' });
   panel.append(
     element('h1', { text: title }),
-    element('div', { class: 'row' }, [clipSelect, play, time]),
-    element('div', { class: 'row' }, [scrub]),
+    element('div', { class: 'row' }, [clipSelect, play]),
+    element('div', { class: 'row' }, [scrub, time]),
     element('div', { class: 'row' }, [prev, next, element('span', { id: 'rb-step', class: 'note' })]),
     element('div', { class: 'row' }, [jointSelect, frameButton]),
     muscles,
