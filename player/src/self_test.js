@@ -397,6 +397,13 @@ function riggerTools(player, reference) {
       });
       ++out.reference_frames;
     });
+    // The joint selector's first muscle: the camera's target where the C++ runtime puts that joint.
+    const last = ref.times.length - 1;
+    scrubTo(ref.times[last]);
+    choose('rb-joint', 1);
+    const expected = new THREE.Vector3().fromArray(ref.skinned[last], 12);
+    out.camera_vs_reference_m = player.selectedJoint === player.muscles[0].node ? player.controls.target.distanceTo(expected) : -1;
+    choose('rb-joint', 0);
     player.jigglesEnabled = true;
   }
   // Stepping: one frame forward and back by the buttons and the keys, the pose the scrubber gives there.
