@@ -137,7 +137,8 @@ void addViewCommand(CLI::App& app, Runner* runner) {
   CLI::App* command = app.add_subcommand(
       "view",
       "Write a page that plays a baked character in the browser (three.js, WebGL 2), from file:// with no server and "
-      "no network: every clip (a selector), the RIGBAKE_muscle_rig muscles and jiggles evaluated live from the skeleton "
+      "no network: every clip (a selector, opening on the one that moves the arms most; a time scrubber, frame steps with "
+      "the , and . keys, an orbit camera that frames a chosen joint, F again, and a floor grid), the RIGBAKE_muscle_rig muscles and jiggles evaluated live from the skeleton "
       "by rigbake's runtime compiled to WebAssembly (runtime), played from the file's channels (sampled) or left at rest (off: the input's "
       "own skinning), 4 influences (three.js's own skinning of JOINTS_0/WEIGHTS_0) or 7 / 10 from the packed 0.001 "
       "weights in the player's shader, a heatmap of how far the muscles move the skin against plain skinning, and a "

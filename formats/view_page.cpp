@@ -61,6 +61,8 @@ const char* kViewPageStyle = R"css(
   select, button { font: inherit; background: #353a43; color: inherit; border: 1px solid #4a505b; border-radius: 4px; padding: 3px 8px; }
   button:disabled, input:disabled + * { opacity: 0.5; }
   #rb-clip { max-width: 100%; }
+  #rb-joint { max-width: 210px; }
+  .scrub { flex: 1; min-width: 0; margin: 0; }
   .group { border: 1px solid #3a3f48; border-radius: 6px; margin: 10px 0; padding: 6px 10px; }
   .group legend { padding: 0 4px; color: #aab; }
   .group label { margin-right: 12px; white-space: nowrap; }

@@ -11,6 +11,7 @@
 // feedback) must match them.
 #include <tiny_gltf.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -354,6 +355,38 @@ void writeAgreementPage(ViewPage* page, const std::string& character, const std:
   std::ofstream(page->page_dir + "/test.html", std::ios::binary) << html;
 }
 
+// The page's rigger controls (self_test.js riggerTools, docs/view.md "On the page") on its default clip:
+// the scrubber pauses and poses (the same time, the same pose; another time, another), one frame step is
+// the clip's key spacing by the buttons and the keys and gives the scrubber's pose there, the orbit
+// camera's target is at the selected joint (and at its new place after F), the floor grid lies at the
+// skin's lowest point, and the panel with its heatmap group is no wider than its box at 1280 x 720 and
+// 800 x 600. Returns the stage's result.
+nlohmann::json checkRiggerTools(const PageResult& run, double frame_step) {
+  const nlohmann::json& rigger = run.result["rigger"];
+  INFO(rigger.dump());
+  REQUIRE(rigger.is_object());
+  CHECK(rigger["paused_by_scrub"] == true);
+  CHECK(rigger["scrub_time_error"].get<double>() < 1e-12);
+  CHECK(rigger["moved_m"].get<double>() > 0.01);  // time 0.41 x duration is another pose than time 0
+  CHECK(rigger["repeat_m"].get<double>() == 0.0);  // and scrubbing back to it gives the same one
+  CHECK(std::abs(rigger["frame_step"].get<double>() - frame_step) < 1e-6);
+  CHECK(std::abs(rigger["next_dt"].get<double>() - frame_step) < 1e-9);
+  CHECK(std::abs(rigger["prev_dt"].get<double>()) < 1e-9);
+  CHECK(std::abs(rigger["key_dt"].get<double>() - 2 * frame_step) < 1e-9);
+  CHECK(std::abs(rigger["key_back_dt"].get<double>() - frame_step) < 1e-9);
+  CHECK(rigger["step_pose_m"].get<double>() < 1e-9);
+  CHECK(rigger["paused_by_step"] == true);
+  CHECK(rigger["camera_target_m"].get<double>() < 1e-3);
+  REQUIRE(rigger["framed"].size() == 2);
+  CHECK(rigger["framed"][1]["reframe_moved_m"].get<double>() > 0.01);  // F followed a joint that moved
+  CHECK(rigger["grid"] == true);
+  CHECK(std::abs(rigger["grid_y"].get<double>() - rigger["bind_min_y"].get<double>()) < 0.02);
+  CHECK(std::abs(rigger["grid_size"].get<double>() - 2 * rigger["character_height"].get<double>()) < 1e-3 * rigger["character_height"].get<double>());
+  REQUIRE(rigger["panel"].size() == 2);
+  for (const auto& size : rigger["panel"]) CHECK(size["fits"] == true);
+  return rigger;
+}
+
 // skin_bound: the GPU's packed skinning against rigbake's (issue 31: 1e-6 m for 10 influences).
 void checkAgreement(const std::string& label, const std::string& character, const std::string& bake_flags,
                     const std::vector<double>& fractions, const std::vector<double>& skin_fractions, double skin_bound) {
@@ -381,6 +414,17 @@ void checkAgreement(const std::string& label, const std::string& character, cons
   CHECK(skinning["frames"].get<int>() == counts.skin_frames);
   CHECK(skinning["vertices"].get<int>() == counts.skin_vertices);
   CHECK(skinning["max_m"].get<double>() < skin_bound);
+  // The scrubber poses the default clip where rigbake's C++ runtime puts the muscle joints at its times.
+  const nlohmann::json& rigger = run.result["rigger"];
+  REQUIRE(rigger.is_object());
+  CHECK(rigger["reference_frames"].get<int>() == static_cast<int>(fractions.size()));
+  CHECK(rigger["reference_m"].get<double>() < kAgreement);
+  // Framing the first muscle joint puts the orbit camera's target where the C++ runtime puts that joint.
+  CHECK(rigger["camera_vs_reference_m"].get<double>() >= 0.0);
+  CHECK(rigger["camera_vs_reference_m"].get<double>() < 1e-3);
+  std::printf("view agreement %s: default clip %s, scrubbed muscle joints vs C++ %.3g m over %d times, camera target vs C++ %.3g m\n", label.c_str(),
+              rigger["defaultClip"].dump().c_str(), rigger["reference_m"].get<double>(), rigger["reference_frames"].get<int>(),
+              rigger["camera_vs_reference_m"].get<double>());
   // The plugin against the native C API frame by frame, jiggles included (hit at frame 5).
   const nlohmann::json& capi = run.result["capi"];
   INFO(run.result["seconds"].dump());
@@ -561,6 +605,17 @@ TEST_CASE("rigbake view: the page plays every clip of the mannequin in every mod
   CHECK(sampled["compared"].get<int>() == 9 * 36);  // 38 parts, the 2 jiggling biceps left out
   CHECK(sampled["translation_m"].get<double>() < kAgreement);
   CHECK(sampled["linear"].get<double>() < kAgreement);
+  // The rigger's controls; the default clip is the one raising the arms (ElbowFlexion, the first, moves
+  // only the forearms), keyed at 30 per second.
+  const nlohmann::json rigger = checkRiggerTools(run, 1.0 / 30.0);
+  CHECK(rigger["defaultClip"] == "ArmRaise");
+  CHECK(rigger["joint_options"].get<int>() == 1 + 38 + 30);
+  CHECK(std::abs(rigger["character_height"].get<double>() - 1.80) < 0.01);  // the mannequin's skin: soles at 0, crown at 1.80 m  // whole character, 38 muscle joints, 30 skeleton joints
+  std::printf("view page rigger: default %s, scrub moved %.3f m, step %.6f s, camera target %.2g m (F followed %.3f m), grid y %.3g m "
+              "(skin's lowest %.3g m, %.2f m across), panel %s\n",
+              rigger["defaultClip"].get<std::string>().c_str(), rigger["moved_m"].get<double>(), rigger["next_dt"].get<double>(),
+              rigger["camera_target_m"].get<double>(), rigger["framed"][1]["reframe_moved_m"].get<double>(), rigger["grid_y"].get<double>(),
+              rigger["bind_min_y"].get<double>(), rigger["grid_size"].get<double>(), rigger["panel"].dump().c_str());
   // From navigation start to the second frame on screen (self_test.js), for docs/view.md.
   REQUIRE(run.result["seconds"]["load"].is_number());
   CHECK(run.result["seconds"]["load"].get<double>() > 0.0);

@@ -58,11 +58,54 @@ function buildControls(panel, player, title) {
   if (!player.clips.length) clipSelect.appendChild(element('option', { value: '0', text: 'no clips: the bind pose' }));
   clipSelect.addEventListener('change', () => player.selectClip(Number(clipSelect.value)));
   const play = element('button', { id: 'rb-play', type: 'button', text: 'Pause' });
+  const showPlaying = () => (play.textContent = player.playing ? 'Pause' : 'Play');
   play.addEventListener('click', () => {
     player.playing = !player.playing;
-    play.textContent = player.playing ? 'Pause' : 'Play';
+    showPlaying();
   });
   const time = element('span', { id: 'rb-time', class: 'time', text: '0.00 s' });
+  // The time scrubber: dragging it pauses and poses the clip at that time (jiggles from rest).
+  const scrub = element('input', { type: 'range', id: 'rb-scrub', class: 'scrub', min: '0', max: '1', step: 'any', value: '0', 'aria-label': 'time' });
+  scrub.addEventListener('input', () => {
+    player.playing = false;
+    player.seek(Number(scrub.value));
+    showPlaying();
+  });
+  const prev = element('button', { id: 'rb-prev', type: 'button', text: '◀ frame', title: 'one frame back (,)' });
+  const next = element('button', { id: 'rb-next', type: 'button', text: 'frame ▶', title: 'one frame on (.)' });
+  prev.addEventListener('click', () => player.step(-1));
+  next.addEventListener('click', () => player.step(1));
+  // The joint the orbit camera frames: the whole character, a muscle joint, or a skeleton joint.
+  const targets = [null];
+  const jointSelect = element('select', { id: 'rb-joint', 'aria-label': 'frame joint' }, [element('option', { value: '0', text: 'whole character' })]);
+  const addTargets = (label, entries) => {
+    if (!entries.length) return;
+    const group = element('optgroup', { label });
+    for (const [name, object] of entries) {
+      group.appendChild(element('option', { value: String(targets.length), text: name }));
+      targets.push(object);
+    }
+    jointSelect.appendChild(group);
+  };
+  addTargets('Muscles', player.muscles.map((m) => [m.name, m.node]));
+  const bones = [];
+  for (const state of player.skinnedMeshes) for (const bone of state.mesh.skeleton.bones) if (!bones.includes(bone)) bones.push(bone);
+  const muscleNodes = new Set(player.muscles.map((m) => m.node));
+  addTargets('Joints', bones.filter((b) => !muscleNodes.has(b)).map((b) => [b.name || `joint ${bones.indexOf(b)}`, b]));
+  player.jointTargets = targets; // the self-test reads which object each option frames
+  jointSelect.addEventListener('change', () => player.frameJoint(targets[Number(jointSelect.value)]));
+  const frameButton = element('button', { id: 'rb-frame', type: 'button', text: 'Frame', title: 'frame the selected joint again (F)' });
+  frameButton.addEventListener('click', () => player.reframe());
+  // Keys: , and . step a frame, F frames the selected joint again. Not while typing in a text field.
+  window.addEventListener('keydown', (event) => {
+    if (event.ctrlKey || event.metaKey || event.altKey || (event.target && event.target.tagName === 'TEXTAREA')) return;
+    if (event.key === ',') player.step(-1);
+    else if (event.key === '.') player.step(1);
+    else if (event.key === 'f' || event.key === 'F') player.reframe();
+    else return;
+    showPlaying();
+    event.preventDefault();
+  });
   const muscles = radioGroup('muscles', 'Muscles', MUSCLE_MODES, ['runtime', 'sampled', 'off'], (mode) => player.setMuscleMode(mode));
   const influences = radioGroup('influences', 'Influences', INFLUENCE_COUNTS, ['4', '7', '10'], (n) => player.setInfluences(n));
   const heat = element('input', { type: 'checkbox', id: 'rb-heatmap' });
@@ -72,10 +115,12 @@ function buildControls(panel, player, title) {
   heat.addEventListener('change', () => player.setHeatmap(heat.checked, Number(heatScale.value)));
   heatScale.addEventListener('change', () => player.setHeatmap(heat.checked, Number(heatScale.value)));
   const legend = element('span', { class: 'legend', id: 'rb-legend' });
-  const heatGroup = element('fieldset', { class: 'group' }, [
+  // Short label, the explanation below it: the group must fit the 320 px panel (no sideways scroll).
+  const heatGroup = element('fieldset', { class: 'group', id: 'rb-heat-group' }, [
     element('legend', { text: 'Heatmap' }),
-    element('label', { for: 'rb-heatmap' }, [heat, document.createTextNode(' displacement against plain skinning, red at ')]),
+    element('label', { for: 'rb-heatmap' }, [heat, document.createTextNode(' on, red at ')]),
     heatScale,
+    element('div', { class: 'note', text: 'displacement against plain skinning (muscles at rest)' }),
     legend,
   ]);
   const hit = element('button', { id: 'rb-hit', type: 'button', text: 'Hit' });
@@ -83,7 +128,10 @@ function buildControls(panel, player, title) {
   const info = element('p', { id: 'rb-info', class: 'info' });
   panel.append(
     element('h1', { text: title }),
-    element('div', { class: 'row' }, [clipSelect, play, time]),
+    element('div', { class: 'row' }, [clipSelect, play]),
+    element('div', { class: 'row' }, [scrub, time]),
+    element('div', { class: 'row' }, [prev, next, element('span', { id: 'rb-step', class: 'note' })]),
+    element('div', { class: 'row' }, [jointSelect, frameButton]),
     muscles,
     influences,
     heatGroup,
@@ -94,6 +142,11 @@ function buildControls(panel, player, title) {
     setRadio('muscles', player.muscleMode, player.availableMuscleModes());
     setRadio('influences', player.influences, player.availableInfluences());
     clipSelect.value = String(player.clipIndex);
+    const clip = player.clips[player.clipIndex];
+    scrub.max = String(clip ? clip.duration : 0);
+    scrub.disabled = prev.disabled = next.disabled = !clip;
+    document.getElementById('rb-step').textContent = clip ? `, and . keys: ${(1 / player.frameStep()).toFixed(3).replace(/\.?0+$/, '')} fps` : '';
+    showPlaying();
     const liveJiggles = player.jiggles.length;
     hit.disabled = !liveJiggles || player.muscleMode !== 'runtime';
     document.getElementById('rb-hit-note').textContent = !liveJiggles
@@ -110,6 +163,7 @@ function buildControls(panel, player, title) {
   player.onChange(update);
   player.onFrame = () => {
     time.textContent = `${player.time.toFixed(2)} s`;
+    scrub.value = String(player.time);
   };
   update();
 }

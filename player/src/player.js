@@ -90,9 +90,57 @@ export class RigbakePlayer {
     this.muscleMode = this.rig ? 'runtime' : this.hasSampledMuscles ? 'sampled' : 'off';
     for (const entry of this.muscles) entry.node.matrixAutoUpdate = this.muscleMode === 'sampled';
     this.applyMaterialState();
-    this.selectClip(0);
+    this.selectClip(this.armClipIndex());
     this.frame();
     this.emit();
+  }
+
+  // The clip a rigger sees first: the one whose upper arms rotate the most (the largest angle between
+  // any key of an upper arm's rotation track and its first key), because the muscles a bake adds are
+  // mostly the arm's; the first clip when no clip turns an upper arm (or none is found by name or VRM).
+  armClipIndex() {
+    const arms = this.upperArmNodes();
+    const q0 = new THREE.Quaternion();
+    const q = new THREE.Quaternion();
+    this.armAngles = this.clips.map((clip) => {
+      let angle = 0;
+      for (const track of clip.clip.tracks) {
+        if (!(track instanceof THREE.QuaternionKeyframeTrack) || !arms.has(track.name.slice(0, track.name.lastIndexOf('.')))) continue;
+        q0.fromArray(track.values, 0);
+        for (let k = 4; k < track.values.length; k += 4) angle = Math.max(angle, q0.angleTo(q.fromArray(track.values, k)));
+      }
+      return angle;
+    });
+    let best = 0;
+    // Strictly larger, so that ties keep the earlier clip; below 1e-3 rad an arm does not visibly move.
+    this.armAngles.forEach((angle, index) => {
+      if (angle > 1e-3 && angle > this.armAngles[best]) best = index;
+    });
+    return best;
+  }
+
+  // The upper arms' three.js object names (what a track's name starts with): VRM's humanoid bones when
+  // the file has them, else the skeleton's joints whose names say upper arm (UpperArm, upper_arm,
+  // upperarm, Arm.L / arm_l style, not forearm, lower arm or their twist bones).
+  upperArmNodes() {
+    const names = new Set();
+    const ext = this.json.extensions || {};
+    const add = (index) => index !== undefined && this.nodes[index] && names.add(this.nodes[index].name);
+    if (ext.VRMC_vrm && ext.VRMC_vrm.humanoid) {
+      const bones = ext.VRMC_vrm.humanoid.humanBones || {};
+      for (const key of ['leftUpperArm', 'rightUpperArm']) if (bones[key]) add(bones[key].node);
+    } else if (ext.VRM && ext.VRM.humanoid) {
+      for (const bone of ext.VRM.humanoid.humanBones || []) if (bone.bone === 'leftUpperArm' || bone.bone === 'rightUpperArm') add(bone.node);
+    }
+    if (names.size) return names;
+    const bones = new Set();
+    for (const state of this.skinnedMeshes) for (const bone of state.mesh.skeleton.bones) bones.add(bone);
+    for (const bone of bones) {
+      const name = bone.name.toLowerCase();
+      if (/twist|roll|fore|lower|hand|helper|muscle/.test(name)) continue;
+      if (/upper[_. ]?arm|arm[_. ]?upper|(^|[^a-z])arm([_. ]?[lr])?([^a-z]|$)|(left|right)arm([^a-z]|$)/.test(name)) names.add(bone.name);
+    }
+    return names;
   }
 
   // The muscle joints: from the extension, or (a `sampled` bake) from the nodes' extras
@@ -261,6 +309,32 @@ export class RigbakePlayer {
     this.frame(dt);
   }
 
+  // One frame of the current clip: its keys' spacing when they are evenly spaced (the rate the clip was
+  // sampled at), else 1/30 s.
+  frameStep() {
+    const clip = this.clips[this.clipIndex];
+    if (!clip) return 1 / 30;
+    let times = null;
+    for (const track of clip.clip.tracks) if (!times || track.times.length > times.length) times = track.times;
+    if (!times || times.length < 3) return 1 / 30;
+    const step = (times[times.length - 1] - times[0]) / (times.length - 1);
+    for (let k = 1; k < times.length; ++k) if (Math.abs(times[k] - times[k - 1] - step) > 1e-3 * step) return 1 / 30;
+    return step > 1e-4 ? step : 1 / 30;
+  }
+
+  // Pauses and moves `frames` frames (negative: back), wrapping at the clip's ends as it loops.
+  step(frames) {
+    this.playing = false;
+    const clip = this.clips[this.clipIndex];
+    if (!clip || !(clip.duration > 0)) return;
+    const dt = this.frameStep();
+    // Frame numbers, not times, are stepped: repeated steps do not accumulate rounding.
+    const count = Math.max(1, Math.round(clip.duration / dt));
+    const frame = (((Math.round(this.time / dt) + frames) % (count + 1)) + count + 1) % (count + 1);
+    this.seek(Math.min(clip.duration, frame * dt));
+    this.emit();
+  }
+
   // Puts the clip at `time` seconds, as the test does; jiggles start again from rest.
   seek(time) {
     this.mixer.setTime(time);
@@ -317,11 +391,25 @@ export class RigbakePlayer {
 
   // ---- view ----
 
+  // The whole character in view, and the floor grid under it.
   frameCamera() {
     const box = new THREE.Box3().setFromObject(this.root, true);
     if (box.isEmpty()) box.set(new THREE.Vector3(-1, 0, -1), new THREE.Vector3(1, 2, 1));
     const center = box.getCenter(new THREE.Vector3());
     const size = box.getSize(new THREE.Vector3());
+    // The character's height from its skin at bind (T- or A-pose, standing: the geometry as stored, placed
+    // by the mesh's world matrix, where three draws it when every bone matrix is the identity), not from
+    // the pose the page opened on, which may crouch or roll; the pose's box when there is no skin.
+    const bind = new THREE.Box3();
+    for (const state of this.skinnedMeshes) {
+      const geometry = state.mesh.geometry;
+      if (!geometry.boundingBox) geometry.computeBoundingBox();
+      bind.union(geometry.boundingBox.clone().applyMatrix4(state.mesh.matrixWorld));
+    }
+    const height = bind.isEmpty() ? size.y : bind.max.y - bind.min.y;
+    this.characterHeight = height > 0 ? height : Math.max(size.x, size.z, 1);
+    this.selectedJoint = null;
+    if (!this.grid) this.addFloorGrid(box); // once, at the pose the page opened with
     const radius = Math.max(size.x, size.y, size.z) * 0.5;
     const distance = radius / Math.tan((this.camera.fov * Math.PI) / 360) * 1.3;
     this.camera.near = distance / 100;
@@ -330,6 +418,37 @@ export class RigbakePlayer {
     this.camera.updateProjectionMatrix();
     this.controls.target.copy(center);
     this.controls.update();
+  }
+
+  // A floor grid at the character's lowest point (the skinned surface as posed when the page opened),
+  // twice its height across in 20 cells, so a pose's contact with the floor and its scale read at once.
+  addFloorGrid(box) {
+    const size = 2 * this.characterHeight;
+    this.grid = new THREE.GridHelper(size, 20, 0x8a93a3, 0x4a505b);
+    const center = box.getCenter(new THREE.Vector3());
+    this.grid.position.set(center.x, box.min.y, center.z);
+    this.scene.add(this.grid);
+  }
+
+  // The orbit camera's target at a joint (any three.js object of the scene) as it is posed now, the
+  // camera kept on its side of the joint at a close-up distance (half the character's height).
+  frameJoint(object) {
+    if (!object) return this.frameCamera();
+    this.selectedJoint = object;
+    object.updateWorldMatrix(true, false);
+    const target = new THREE.Vector3().setFromMatrixPosition(object.matrixWorld);
+    const direction = new THREE.Vector3().subVectors(this.camera.position, this.controls.target);
+    if (direction.lengthSq() === 0) direction.set(0, 0, 1);
+    direction.setLength(0.5 * (this.characterHeight || 1.8));
+    this.camera.position.copy(target).add(direction);
+    this.controls.target.copy(target);
+    this.controls.update();
+  }
+
+  // 'F': frames the selected joint again where it is now (or the whole character).
+  reframe() {
+    if (this.selectedJoint) this.frameJoint(this.selectedJoint);
+    else this.frameCamera();
   }
 
   resize() {

@@ -355,6 +355,144 @@ function runtimeCost(player) {
   return { muscles: player.muscles.length, jiggles: player.jiggles.length, us_per_frame: ((performance.now() - t0) * 1000) / frames };
 }
 
+// What a rigger uses besides the modes (docs/view.md "On the page"), through the page's own controls on
+// the default clip: the scrubber (pauses, poses the clip at the time; with a reference, the muscle joints
+// where rigbake's C++ runtime puts them at the reference's times), frame stepping (buttons and , . keys),
+// the joint selector and F (the orbit camera's target at the joint), the floor grid, and the panel's width.
+function riggerTools(player, reference) {
+  const out = { defaultClip: player.clips.length ? player.clips[player.clipIndex].name : null };
+  if (!player.clips.length) return out;
+  const clip = player.clips[player.clipIndex];
+  choose('rb-clip', clip.index);
+  const scrub = document.getElementById('rb-scrub');
+  const scrubTo = (t) => {
+    scrub.value = String(t);
+    scrub.dispatchEvent(new Event('input'));
+  };
+  const objects = [...new Set([...player.muscles.map((m) => m.node), ...player.skinnedMeshes.flatMap((s) => s.mesh.skeleton.bones)])];
+  const positions = () => objects.map((o) => new THREE.Vector3().setFromMatrixPosition(o.matrixWorld));
+  const farthest = (a, b) => Math.max(...a.map((p, i) => p.distanceTo(b[i])));
+  // Scrubbing: pauses, poses, and the same time gives the same pose.
+  const t1 = 0.41 * clip.duration;
+  player.playing = true;
+  scrubTo(t1);
+  out.paused_by_scrub = !player.playing && document.getElementById('rb-play').textContent === 'Play';
+  out.scrub_time_error = Math.abs(player.time - t1);
+  const p1 = positions();
+  scrubTo(0);
+  out.moved_m = farthest(p1, positions());
+  scrubTo(t1);
+  out.repeat_m = farthest(p1, positions());
+  // Against rigbake's C++ runtime (the agreement pages): the muscle joints' translations at the times.
+  const ref = reference && reference.clips.find((c) => c.animation === clip.index);
+  out.reference_frames = 0;
+  out.reference_m = 0;
+  if (ref && player.muscleMode === 'runtime') {
+    player.jigglesEnabled = false; // the reference has no jiggles
+    ref.times.forEach((time, i) => {
+      scrubTo(time);
+      player.muscles.forEach((entry, m) => {
+        const e = entry.node.matrixWorld.elements;
+        for (let k = 12; k < 15; ++k) out.reference_m = Math.max(out.reference_m, Math.abs(e[k] - ref.skinned[i][16 * m + k]));
+      });
+      ++out.reference_frames;
+    });
+    // The joint selector's first muscle: the camera's target where the C++ runtime puts that joint.
+    const last = ref.times.length - 1;
+    scrubTo(ref.times[last]);
+    choose('rb-joint', 1);
+    const expected = new THREE.Vector3().fromArray(ref.skinned[last], 12);
+    out.camera_vs_reference_m = player.selectedJoint === player.muscles[0].node ? player.controls.target.distanceTo(expected) : -1;
+    choose('rb-joint', 0);
+    player.jigglesEnabled = true;
+  }
+  // Stepping: one frame forward and back by the buttons and the keys, the pose the scrubber gives there.
+  const dt = player.frameStep();
+  out.frame_step = dt;
+  const start = 10 * dt;
+  scrubTo(start);
+  const key = (k) => window.dispatchEvent(new KeyboardEvent('keydown', { key: k }));
+  click('rb-next');
+  out.next_dt = player.time - start;
+  const stepped = positions();
+  scrubTo(start + dt);
+  out.step_pose_m = farthest(stepped, positions());
+  click('rb-prev');
+  out.prev_dt = player.time - start;
+  key('.');
+  key('.');
+  out.key_dt = player.time - start;
+  key(',');
+  out.key_back_dt = player.time - start;
+  out.paused_by_step = !player.playing;
+  // The orbit camera: the target at the chosen joint (a muscle joint, the last skeleton joint), and
+  // after a frame's step F puts it at the joint's new place.
+  const select = document.getElementById('rb-joint');
+  out.joint_options = select.options.length;
+  out.camera_target_m = 0;
+  out.framed = [];
+  // The first muscle, and the joint that moves most between the two times (the page's list of targets).
+  const targets = player.jointTargets;
+  const worldAt = (t) => {
+    scrubTo(t);
+    return targets.map((o) => (o ? new THREE.Vector3().setFromMatrixPosition(o.matrixWorld) : null));
+  };
+  const a = worldAt(start + dt);
+  const b = worldAt(0.75 * clip.duration);
+  let most = 1;
+  targets.forEach((o, i) => {
+    if (o && a[i].distanceTo(b[i]) > a[most].distanceTo(b[most])) most = i;
+  });
+  for (const value of [1, most]) {
+    if (value < 1 || value >= select.options.length) continue;
+    scrubTo(start + dt);
+    choose('rb-joint', value);
+    const joint = player.selectedJoint;
+    const at = () => player.controls.target.distanceTo(new THREE.Vector3().setFromMatrixPosition(joint.matrixWorld));
+    out.camera_target_m = Math.max(out.camera_target_m, at());
+    const before = new THREE.Vector3().setFromMatrixPosition(joint.matrixWorld);
+    scrubTo(0.75 * clip.duration);
+    key('F');
+    out.camera_target_m = Math.max(out.camera_target_m, at());
+    out.framed.push({ name: select.options[value].text, object: joint.name, reframe_moved_m: before.distanceTo(new THREE.Vector3().setFromMatrixPosition(joint.matrixWorld)) });
+  }
+  choose('rb-joint', 0);
+  // The floor grid against the skinned meshes' bind-pose geometry (their lowest point in the scene).
+  out.grid = !!(player.grid instanceof THREE.GridHelper && player.grid.parent === player.scene);
+  if (out.grid) {
+    const box = new THREE.Box3();
+    for (const state of player.skinnedMeshes) {
+      const geometry = state.mesh.geometry;
+      if (!geometry.boundingBox) geometry.computeBoundingBox();
+      box.union(geometry.boundingBox.clone().applyMatrix4(state.mesh.matrixWorld));
+    }
+    player.grid.geometry.computeBoundingBox();
+    out.grid_y = player.grid.position.y;
+    out.grid_size = player.grid.geometry.boundingBox.max.x - player.grid.geometry.boundingBox.min.x;
+    out.bind_min_y = box.min.y;
+    out.character_height = player.characterHeight;
+  }
+  // The panel, the heatmap group in it, at two page sizes: nothing wider than its box.
+  const root = document.getElementById('rigbake-player') || document.getElementById('rb-panel').parentElement;
+  const panel = document.getElementById('rb-panel');
+  const heat = document.getElementById('rb-heat-group');
+  out.panel = [];
+  for (const [width, height] of [[1280, 720], [800, 600]]) {
+    root.style.width = `${width}px`;
+    root.style.height = `${height}px`;
+    out.panel.push({
+      width,
+      height,
+      panel: [panel.scrollWidth, panel.clientWidth],
+      heatmap: [heat.scrollWidth, heat.clientWidth],
+      fits: panel.scrollWidth <= panel.clientWidth && heat.scrollWidth <= heat.clientWidth,
+    });
+  }
+  root.style.width = '';
+  root.style.height = '';
+  return out;
+}
+
 export async function runSelfTest(player, reference, loadError = null) {
   const started = performance.now();
   const result = { done: false, loaded: !!player && !loadError, errors: captured.errors, warnings: captured.warnings, seconds: {} };
@@ -394,6 +532,7 @@ export async function runSelfTest(player, reference, loadError = null) {
       muscleModes: player.availableMuscleModes(),
       influences: player.availableInfluences(),
     };
+    stage('rigger', () => riggerTools(player, reference));
     stage('clips', () => playEveryClip(player));
     stage('modes', () => everyMode(player));
     stage('hit', () => hitTest(player));
