@@ -29,6 +29,8 @@ namespace worked_example_doc_test {
 using test::runCli;
 using test::slurp;
 
+constexpr double kPi = 3.14159265358979323846;
+
 // The doc's "## Example" section, up to the next "## " heading.
 std::string exampleSection() {
   const std::string doc = slurp(test::sourceDir() + "/docs/extensions/RIGBAKE_muscle_rig.md");
@@ -248,6 +250,35 @@ TEST_CASE("extension doc: the example's JSON, counts, nodes and worked evaluatio
   // The ratio key the doc names sits at this very ratio: the fit put its deepest key where the clips are.
   const runtime::ResponseKey<double>& second = rig.keys[rig.muscles[muscle].ratio_key_begin + 1];
   CHECK(std::abs(second.at - drivers.clamped_ratio) < 1e-8);
+  // The prose reading of the curves: "at ratio 0.7862, ... moves 2.0 cm ... and scales by 1.553 ..., and at the
+  // compression limit (ratio 0.5 ...) it holds 1.5 cm and 1.414 ... flat within ±0.6975 rad ... swells it
+  // by 11 % at −π/2 and 12 % at +π/2".
+  std::smatch curve;
+  REQUIRE(std::regex_search(flat, curve, std::regex("at ratio ([0-9.]+), the deepest compression the clips reach, the skinned joint "
+                                                    "moves ([0-9.]+) cm along its up axis and scales by ([0-9.]+) across the fibre, "
+                                                    "less on the way there, and at the compression limit \\(ratio ([0-9.]+), .*?\\) "
+                                                    "it holds ([0-9.]+) cm and ([0-9.]+),.*? flat within ±([0-9.]+) rad .*? swells "
+                                                    "it by ([0-9]+) % at −π/2 and ([0-9]+) % at \\+π/2")));
+  const runtime::RigMuscle<double>& part = rig.muscles[muscle];
+  REQUIRE(part.ratio_key_count >= 2);
+  REQUIRE(part.twist_key_count == 5);
+  const runtime::ResponseKey<double>* ratio_keys = &rig.keys[part.ratio_key_begin];
+  const runtime::ResponseKey<double>* twist_keys = &rig.keys[part.twist_key_begin];
+  const std::vector<std::pair<double, std::string>> prose = {
+      {ratio_keys[1].at, curve[1]}, {100 * ratio_keys[1].up, curve[2]}, {ratio_keys[1].scale, curve[3]},
+      {ratio_keys[0].at, curve[4]}, {100 * ratio_keys[0].up, curve[5]}, {ratio_keys[0].scale, curve[6]},
+      {twist_keys[3].at, curve[7]}, {-twist_keys[1].at, curve[7]},
+      {100 * (twist_keys[0].scale - 1), curve[8]}, {100 * (twist_keys[4].scale - 1), curve[9]}};
+  for (const auto& [value, token] : prose) {
+    INFO(token << " printed, " << value << " computed");
+    CHECK(std::abs(value - std::stod(token)) <= printedTolerance(token));
+    ++numbers;
+  }
+  CHECK(ratio_keys[0].at == part.compression);  // "the compression limit"
+  CHECK(std::abs(twist_keys[0].at + kPi / 2) < 1e-4);
+  CHECK(std::abs(twist_keys[4].at - kPi / 2) < 1e-4);
+  for (int k = 1; k <= 3; ++k) CHECK((twist_keys[k].up == 0 && twist_keys[k].side == 0 && twist_keys[k].scale == 1));  // "flat"
+
   // "The same bake with `--muscle-motion both` writes the same extension and ... K' as a TRS channel:
   // translation `(0.0286, 0, 0.0475)` ... and scale `(1, 1.5527, 1.5527)`."
   const std::string both = dir / "both.glb";
