@@ -35,35 +35,34 @@ std::string defaultPlayerBundle() {
   return (std::filesystem::path(RIGBAKE_DEFAULT_PRESET_DIR).parent_path() / ".tools" / "player" / kViewPlayerFile).string();
 }
 
-std::string readPlayerBundle(const std::string& path) {
-  std::string bundle;
+// One of the files scripts/install-player.sh writes, or VIEW_PLAYER_MISSING: `missing` when it cannot be
+// read, "is not the NAME (no MARKER in it)" when it lacks the marker the installer builds into it.
+std::string readPlayerFile(const std::string& path, const std::string& marker, const std::string& name,
+                           const std::string& missing) {
+  std::string text;
   try {
-    bundle = readFile(path);
+    text = readFile(path);
   } catch (const Error&) {
-    fail(errc::VIEW_PLAYER_MISSING, path,
-         "the bundled player is not there: run scripts/install-player.sh (it installs three.js and esbuild from "
-         "player/package-lock.json and builds the bundle), or pass --player FILE");
+    fail(errc::VIEW_PLAYER_MISSING, path, missing);
   }
-  if (bundle.find("RigbakePlayer") == std::string::npos)
-    fail(errc::VIEW_PLAYER_MISSING, path, "is not the rigbake player bundle (no RigbakePlayer in it): run scripts/install-player.sh");
-  return bundle;
+  if (text.find(marker) == std::string::npos)
+    fail(errc::VIEW_PLAYER_MISSING, path, "is not " + name + " (no " + marker + " in it): run scripts/install-player.sh");
+  return text;
+}
+
+std::string readPlayerBundle(const std::string& path) {
+  return readPlayerFile(path, "RigbakePlayer", "the rigbake player bundle",
+                        "the bundled player is not there: run scripts/install-player.sh (it installs three.js and esbuild "
+                        "from player/package-lock.json and builds the bundle), or pass --player FILE");
 }
 
 // Three's Draco decoder files as one script (scripts/install-player.sh writes it beside the bundle), for a
 // Draco-compressed file's page.
 std::string readDracoScript(const std::string& player_path) {
-  const std::string path = (std::filesystem::path(player_path).parent_path() / kViewDracoFile).string();
-  std::string script;
-  try {
-    script = readFile(path);
-  } catch (const Error&) {
-    fail(errc::VIEW_PLAYER_MISSING, path,
-         "the Draco decoder script a KHR_draco_mesh_compression file's page needs is not beside the player bundle: run "
-         "scripts/install-player.sh");
-  }
-  if (script.find("RIGBAKE_DRACO") == std::string::npos)
-    fail(errc::VIEW_PLAYER_MISSING, path, "is not the player's Draco decoder script (no RIGBAKE_DRACO in it): run scripts/install-player.sh");
-  return script;
+  return readPlayerFile((std::filesystem::path(player_path).parent_path() / kViewDracoFile).string(), "RIGBAKE_DRACO",
+                        "the player's Draco decoder script",
+                        "the Draco decoder script a KHR_draco_mesh_compression file's page needs is not beside the player "
+                        "bundle: run scripts/install-player.sh");
 }
 
 // What would break the player: a malformed rig extension, packed attributes that do not decode.
