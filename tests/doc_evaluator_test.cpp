@@ -1,0 +1,157 @@
+// The RIGBAKE_muscle_rig document is enough to implement the rig: tests/doc_evaluator/muscle_rig_from_doc.mjs,
+// written from docs/extensions/RIGBAKE_muscle_rig.md and the schema alone (never from runtime/ or player/),
+// evaluates real bakes in node, and this case holds its skinned joints, helpers and drivers to the C++
+// runtime's MuscleRigJob<double> on the same float poses: the mannequin's and CesiumMan's clips and a
+// `rigbake rom` forearm twist (the clip that drives the twist curves).
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include "cli_support.h"
+#include "external_tools.h"
+#include "formats/baked_gltf.h"
+#include "formats/gltf_document.h"
+#include "glb_support.h"
+#include "pipeline/pose.h"
+#include "runtime/muscle_rig.h"
+#include "runtime/muscle_rig_convert.h"
+
+namespace rigbake {
+namespace doc_evaluator_test {
+
+using test::runCli;
+using test::slurp;
+using test::TempDir;
+
+struct Figures {
+  double translation = 0.0, linear = 0.0, helper_translation = 0.0, helper_linear = 0.0, ratio = 0.0, twist = 0.0;
+  double largest_twist = 0.0;
+  size_t frames = 0, muscles = 0;
+};
+
+// Bakes INPUT, writes the poses of the clips whose name starts with CLIP_PREFIX (every clip for "") at
+// 30 fps as tests/runtime_c_api_test.cpp does for the WebAssembly check (every node's world matrix in
+// float, identity for non-joint nodes), runs the node evaluator on them and compares.
+Figures compareOn(const std::string& input, const std::string& clip_prefix) {
+  TempDir dir;
+  const std::string baked = dir / "baked.glb";
+  const test::CliResult run = runCli("bake " + test::external::shellQuote(input) + " --helper-joints -o " + baked);
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const LoadedCharacter loaded = loadCharacter(baked);
+  const BakedFileData file = readBakedFileData(loaded);
+  const nlohmann::json json = test::glbJson(slurp(baked));
+  const int node_count = static_cast<int>(json["nodes"].size());
+  const std::string json_path = dir / "extension.json", poses_path = dir / "poses.f32", out_path = dir / "out.f64";
+  std::ofstream(json_path, std::ios::binary) << json["extensions"]["RIGBAKE_muscle_rig"].dump();
+
+  const Skeleton& skeleton = loaded.character.skeleton;
+  const runtime::MuscleRig<double> rig = runtime::convertMuscleRig<double>(file.rig.rig);
+  const size_t muscles = rig.muscles.size();
+  std::vector<float> poses;
+  std::vector<double> expected;  // per frame and muscle: skinned (16), helpers (48), drivers (3)
+  std::vector<double> joints(16 * static_cast<size_t>(skeleton.size())), skinned(16 * muscles), helpers(48 * muscles);
+  std::vector<runtime::MuscleDrivers<double>> drivers(muscles);
+  Figures figures;
+  figures.muscles = muscles;
+  for (const Clip& clip : loaded.character.clips) {
+    if (clip.name.rfind(clip_prefix, 0) != 0) continue;
+    for (double t : sampleTimes(clip, 30.0)) {
+      const Pose pose = sampleClip(skeleton, clip, t);
+      std::vector<float> nodes(16 * static_cast<size_t>(node_count), 0.0f);
+      for (int n = 0; n < node_count; ++n)
+        for (int k = 0; k < 4; ++k) nodes[16 * n + 5 * k] = 1.0f;
+      for (int j = 0; j < skeleton.size(); ++j) {
+        const Eigen::Matrix4d m = pose.world[j].matrix();
+        for (int k = 0; k < 16; ++k) {
+          const float value = static_cast<float>(m.data()[k]);
+          nodes[16 * static_cast<size_t>(skeleton.nodes[j]) + k] = value;
+          joints[16 * j + k] = value;  // the float the evaluator reads, widened
+        }
+      }
+      poses.insert(poses.end(), nodes.begin(), nodes.end());
+      runtime::MuscleRigJob<double> job;
+      job.rig = &rig;
+      job.joint_matrices = joints;
+      job.skinned_matrices = skinned;
+      job.helper_matrices = helpers;
+      job.drivers = drivers;
+      REQUIRE(job.Run());
+      for (size_t m = 0; m < muscles; ++m) {
+        expected.insert(expected.end(), skinned.begin() + 16 * m, skinned.begin() + 16 * (m + 1));
+        expected.insert(expected.end(), helpers.begin() + 48 * m, helpers.begin() + 48 * (m + 1));
+        expected.insert(expected.end(), {drivers[m].ratio, drivers[m].clamped_ratio, drivers[m].twist});
+      }
+      ++figures.frames;
+    }
+  }
+  REQUIRE(figures.frames > 0);
+  std::ofstream(poses_path, std::ios::binary).write(reinterpret_cast<const char*>(poses.data()), poses.size() * sizeof(float));
+  const std::string command = "node " + std::string(RIGBAKE_SOURCE_DIR) + "/tests/doc_evaluator_check.mjs " + json_path + " " +
+                              std::to_string(node_count) + " " + poses_path + " " + out_path;
+  REQUIRE(std::system(command.c_str()) == 0);
+  const std::string bytes = slurp(out_path);
+  REQUIRE(bytes.size() == expected.size() * sizeof(double));
+  std::vector<double> written(expected.size());
+  std::memcpy(written.data(), bytes.data(), bytes.size());
+
+  const nlohmann::json& extension_muscles = json["extensions"]["RIGBAKE_muscle_rig"]["muscles"];
+  REQUIRE(extension_muscles.size() == muscles);
+  for (size_t k = 0; k < expected.size(); ++k) {
+    const size_t m = (k / 67) % muscles, at = k % 67;
+    const double difference = std::abs(written[k] - expected[k]);
+    if (at < 16) {
+      if (at % 4 == 3) continue;  // the bottom row, 0 0 0 1 in both
+      (at >= 12 ? figures.translation : figures.linear) = std::max(at >= 12 ? figures.translation : figures.linear, difference);
+    } else if (at < 64) {
+      if (!extension_muscles[m].contains("helperNodes") || at % 4 == 3) continue;
+      const bool translation = (at - 16) % 16 >= 12;
+      double& worst = translation ? figures.helper_translation : figures.helper_linear;
+      worst = std::max(worst, difference);
+    } else if (at < 66) {
+      figures.ratio = std::max(figures.ratio, difference);
+    } else {
+      // The twist is in (−π, π]: near ±π the two sides may land on either end.
+      figures.twist = std::max(figures.twist, std::min(difference, std::abs(difference - 2 * 3.14159265358979323846)));
+      figures.largest_twist = std::max(figures.largest_twist, std::abs(expected[k]));
+    }
+  }
+  std::printf("doc evaluator vs MuscleRigJob<double>, %s%s: %zu frames, %zu muscles; largest differences: skinned translation %.3g m, "
+              "rotation/scale %.3g; helpers %.3g m, %.3g; ratio %.3g; twist %.3g rad (largest twist %.2f rad)\n",
+              std::filesystem::path(input).filename().c_str(), clip_prefix.empty() ? "" : (" clips " + clip_prefix + "*").c_str(),
+              figures.frames, figures.muscles, figures.translation, figures.linear, figures.helper_translation, figures.helper_linear,
+              figures.ratio, figures.twist, figures.largest_twist);
+  CHECK(figures.muscles > 10);
+  CHECK(figures.translation <= 1e-5);
+  CHECK(figures.linear <= 1e-4);
+  CHECK(figures.helper_translation <= 1e-5);
+  CHECK(figures.helper_linear <= 1e-4);
+  CHECK(figures.ratio <= 1e-4);
+  CHECK(figures.twist <= 1e-4);
+  return figures;
+}
+
+TEST_CASE("doc evaluator: a node evaluator written from the RIGBAKE_muscle_rig document alone matches the C++ runtime (sample, CesiumMan, ROM)") {
+  if (!test::external::requireTool(test::external::onPath("node"), "node")) return;
+  compareOn(test::sampleGlbPathForCli(), "");
+  const std::string cesium = test::requireAsset("CesiumMan.glb");
+  if (!cesium.empty()) compareOn(cesium, "");
+  // A ROM clip on the mannequin: the forearm twist turns the insertion joints about the fibre, so the
+  // twist driver and the twist curves (equations 4-6) are exercised, not only the ratio.
+  TempDir dir;
+  const std::string rom = dir / "rom.glb";
+  const test::CliResult run = runCli("rom " + test::sampleGlbPathForCli() + " --clips forearm_twist -o " + rom);
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const Figures figures = compareOn(rom, "rom_");
+  CHECK(figures.largest_twist > 0.5);
+}
+
+}  // namespace doc_evaluator_test
+}  // namespace rigbake
