@@ -19,6 +19,7 @@
 #include "formats/gltf_document.h"
 #include "glb_support.h"
 #include "pipeline/pose.h"
+#include "runtime/jiggle.h"
 #include "runtime/muscle_rig.h"
 #include "runtime/muscle_rig_convert.h"
 
@@ -153,6 +154,135 @@ TEST_CASE("doc evaluator: a node evaluator written from the RIGBAKE_muscle_rig d
   REQUIRE(run.exit_code == 0);
   const Figures figures = compareOn(rom, "rom_");
   CHECK(figures.largest_twist > 0.5);
+}
+
+// The jiggles (equation 10) stepped by tests/doc_evaluator/jiggles_from_doc.mjs against JiggleJob<double>,
+// driven as tests/runtime_c_api_test.cpp drives the C API: every clip of the mannequin baked with
+// `--jiggle biceps` at 30 fps, a reset at each clip's first frame and a hit on the first jiggle at its
+// frame 5. The jiggling nodes are muscle skinned nodes, so their matrices are MuscleRigJob's (10, "Order").
+TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig document alone match JiggleJob<double> (sample, hits)") {
+  if (!test::external::requireTool(test::external::onPath("node"), "node")) return;
+  TempDir dir;
+  const std::string baked = dir / "baked.glb";
+  const test::CliResult run = runCli("bake " + test::sampleGlbPathForCli() + " --jiggle biceps -o " + baked);
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const LoadedCharacter loaded = loadCharacter(baked);
+  const BakedFileData file = readBakedFileData(loaded);
+  const nlohmann::json json = test::glbJson(slurp(baked));
+  const nlohmann::json& extension = json["extensions"]["RIGBAKE_muscle_rig"];
+  const int node_count = static_cast<int>(json["nodes"].size());
+  const std::string json_path = dir / "extension.json", poses_path = dir / "poses.f64", frames_path = dir / "frames.json",
+                    out_path = dir / "out.f64";
+  std::ofstream(json_path, std::ios::binary) << extension.dump();
+
+  runtime::JiggleRig<double> jiggle_rig;
+  jiggle_rig.joint_count = node_count;
+  for (const nlohmann::json& item : extension.at("jiggles")) {
+    runtime::JiggleSpec<double> spec;
+    spec.joint = item.at("node").get<int>();
+    spec.parent = item.at("parentNode").get<int>();
+    spec.root = item.at("rootNode").get<int>();
+    for (int k = 0; k < 3; ++k) {
+      spec.aim_axis[k] = item.at("aimAxis")[k].get<double>();
+      spec.major_axis[k] = item.at("majorAxis")[k].get<double>();
+      spec.root_up[k] = item.at("rootUp")[k].get<double>();
+    }
+    spec.length = item.at("length").get<double>();
+    spec.stiffness = item.at("stiffness").get<double>();
+    spec.damping = item.at("damping").get<double>();
+    spec.clamp_major_deg = item.at("clampMajorDeg").get<double>();
+    spec.clamp_minor_deg = item.at("clampMinorDeg").get<double>();
+    REQUIRE(*runtime::jiggleSpecProblem(spec, node_count) == '\0');
+    jiggle_rig.jiggles.push_back(runtime::buildJiggleSettings(spec));
+  }
+  const size_t jiggles = jiggle_rig.jiggles.size();
+  REQUIRE(jiggles >= 2);
+
+  const Skeleton& skeleton = loaded.character.skeleton;
+  const runtime::MuscleRig<double> rig = runtime::convertMuscleRig<double>(file.rig.rig);
+  const size_t muscles = rig.muscles.size();
+  std::vector<double> poses, expected, nodes, joints(16 * static_cast<size_t>(skeleton.size())), skinned(16 * muscles);
+  std::vector<double> corrections(4 * jiggles), points(3 * jiggles);
+  std::vector<runtime::JiggleState> states(jiggles);
+  nlohmann::json frames = nlohmann::json::array();
+  const double hit[3] = {0.3, 0.0, 1.0};
+  for (const Clip& clip : loaded.character.clips) {
+    const std::vector<double> times = sampleTimes(clip, 30.0);
+    for (size_t f = 0; f < times.size(); ++f) {
+      const Pose pose = sampleClip(skeleton, clip, times[f]);
+      nodes.assign(16 * static_cast<size_t>(node_count), 0.0);
+      for (int n = 0; n < node_count; ++n)
+        for (int k = 0; k < 4; ++k) nodes[16 * n + 5 * k] = 1.0;
+      for (int j = 0; j < skeleton.size(); ++j) {
+        const Eigen::Matrix4d m = pose.world[j].matrix();
+        for (int k = 0; k < 16; ++k) {
+          const double value = static_cast<float>(m.data()[k]);  // the float an engine gives, widened
+          nodes[16 * static_cast<size_t>(skeleton.nodes[j]) + k] = value;
+          joints[16 * j + k] = value;
+        }
+      }
+      runtime::MuscleRigJob<double> muscle_job;
+      muscle_job.rig = &rig;
+      muscle_job.joint_matrices = joints;
+      muscle_job.skinned_matrices = skinned;
+      REQUIRE(muscle_job.Run());
+      for (size_t m = 0; m < muscles; ++m) {
+        const size_t node = extension["muscles"][m].at("skinnedNode").get<size_t>();
+        std::copy(skinned.begin() + 16 * m, skinned.begin() + 16 * (m + 1), nodes.begin() + 16 * node);
+      }
+      poses.insert(poses.end(), nodes.begin(), nodes.end());
+      if (f == 0) {
+        runtime::JiggleResetJob<double> reset;
+        reset.rig = &jiggle_rig;
+        reset.joint_matrices = nodes;
+        reset.states = states;
+        REQUIRE(reset.Run());
+      }
+      if (f == 5) REQUIRE(runtime::applyJiggleImpulse<double>(states, 0, hit, 1.5));
+      const double dt = f == 0 ? 0.0 : times[f] - times[f - 1];
+      frames.push_back({{"dt", dt}, {"reset", f == 0}, {"hit", f == 5 ? nlohmann::json::array({0, hit, 1.5}) : nlohmann::json()}});
+      runtime::JiggleJob<double> job;
+      job.rig = &jiggle_rig;
+      job.joint_matrices = nodes;
+      job.delta_time = dt;
+      job.states = states;
+      job.corrections = corrections;
+      job.points = points;
+      REQUIRE(job.Run());
+      for (size_t j = 0; j < jiggles; ++j) {
+        expected.insert(expected.end(), corrections.begin() + 4 * j, corrections.begin() + 4 * (j + 1));
+        expected.insert(expected.end(), points.begin() + 3 * j, points.begin() + 3 * (j + 1));
+      }
+    }
+  }
+  std::ofstream(poses_path, std::ios::binary).write(reinterpret_cast<const char*>(poses.data()), poses.size() * sizeof(double));
+  std::ofstream(frames_path, std::ios::binary) << frames.dump();
+  const std::string command = "node " + std::string(RIGBAKE_SOURCE_DIR) + "/tests/doc_evaluator_jiggle_check.mjs " + json_path + " " +
+                              std::to_string(node_count) + " " + poses_path + " " + frames_path + " " + out_path;
+  REQUIRE(std::system(command.c_str()) == 0);
+  const std::string bytes = slurp(out_path);
+  REQUIRE(bytes.size() == expected.size() * sizeof(double));
+  std::vector<double> written(expected.size());
+  std::memcpy(written.data(), bytes.data(), bytes.size());
+  double point = 0.0, correction = 0.0, largest_angle = 0.0;
+  for (size_t at = 0; at < expected.size(); at += 7) {
+    // q and -q are the same rotation.
+    double same = 0.0, opposite = 0.0;
+    for (int k = 0; k < 4; ++k) {
+      same = std::max(same, std::abs(written[at + k] - expected[at + k]));
+      opposite = std::max(opposite, std::abs(written[at + k] + expected[at + k]));
+    }
+    correction = std::max(correction, std::min(same, opposite));
+    for (int k = 4; k < 7; ++k) point = std::max(point, std::abs(written[at + k] - expected[at + k]));
+    largest_angle = std::max(largest_angle, 2.0 * std::acos(std::min(1.0, std::abs(expected[at + 3]))) * 180.0 / 3.14159265358979323846);
+  }
+  std::printf("doc evaluator jiggles vs JiggleJob<double>, sample --jiggle biceps: %zu frames, %zu jiggles, largest correction %.2f deg; "
+              "largest differences: point %.3g m, correction quaternion %.3g\n",
+              frames.size(), jiggles, largest_angle, point, correction);
+  CHECK(largest_angle > 1.0);  // the jiggles moved, so the spring, the hit and the clamp were compared
+  CHECK(point <= 1e-5);
+  CHECK(correction <= 1e-4);
 }
 
 }  // namespace doc_evaluator_test
