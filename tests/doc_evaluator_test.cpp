@@ -158,7 +158,7 @@ TEST_CASE("doc evaluator: a node evaluator written from the RIGBAKE_muscle_rig d
 
 // The jiggles (equation 10) stepped by tests/doc_evaluator/jiggles_from_doc.mjs against JiggleJob<double>,
 // driven as tests/runtime_c_api_test.cpp drives the C API: every clip of the mannequin baked with
-// `--jiggle biceps` at 30 fps, a reset at each clip's first frame and a hit on the first jiggle at its
+// `--jiggle biceps` at 30 fps and again at 50 fps, a reset at each clip's first frame and a hit on the first jiggle at its
 // frame 5. The jiggling nodes are muscle skinned nodes, so their matrices are MuscleRigJob's (10, "Order").
 TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig document alone match JiggleJob<double> (sample, hits)") {
   if (!test::external::requireTool(test::external::onPath("node"), "node")) return;
@@ -207,8 +207,18 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
   std::vector<runtime::JiggleState> states(jiggles);
   nlohmann::json frames = nlohmann::json::array();
   const double hit[3] = {0.3, 0.0, 1.0};
-  for (const Clip& clip : loaded.character.clips) {
-    const std::vector<double> times = sampleTimes(clip, 30.0);
+  // 30 fps divides the 240 Hz step; 50 fps does not, so the leftover time, the interpolated step poses
+  // and the extrapolated output (10b, 10f) are compared too.
+  std::vector<std::vector<double>> runs;
+  std::vector<const Clip*> run_clips;
+  for (const double fps : {30.0, 50.0})
+    for (const Clip& clip : loaded.character.clips) {
+      runs.push_back(sampleTimes(clip, fps));
+      run_clips.push_back(&clip);
+    }
+  for (size_t r = 0; r < runs.size(); ++r) {
+    const Clip& clip = *run_clips[r];
+    const std::vector<double>& times = runs[r];
     for (size_t f = 0; f < times.size(); ++f) {
       const Pose pose = sampleClip(skeleton, clip, times[f]);
       nodes.assign(16 * static_cast<size_t>(node_count), 0.0);
@@ -277,7 +287,7 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
     for (int k = 4; k < 7; ++k) point = std::max(point, std::abs(written[at + k] - expected[at + k]));
     largest_angle = std::max(largest_angle, 2.0 * std::acos(std::min(1.0, std::abs(expected[at + 3]))) * 180.0 / 3.14159265358979323846);
   }
-  std::printf("doc evaluator jiggles vs JiggleJob<double>, sample --jiggle biceps: %zu frames, %zu jiggles, largest correction %.2f deg; "
+  std::printf("doc evaluator jiggles vs JiggleJob<double>, sample --jiggle biceps, 30 and 50 fps: %zu frames, %zu jiggles, largest correction %.2f deg; "
               "largest differences: point %.3g m, correction quaternion %.3g\n",
               frames.size(), jiggles, largest_angle, point, correction);
   CHECK(largest_angle > 1.0);  // the jiggles moved, so the spring, the hit and the clamp were compared
