@@ -2,7 +2,7 @@
 // frames tests/doc_evaluator_test.cpp writes: POSES.f64 holds frames * NODE_COUNT * 16 doubles (each
 // node's un-jiggled world matrix, muscle skinned nodes included), FRAMES.json one { dt, reset, hit } per
 // frame (hit: [jiggle, direction, magnitude] or null). Writes to OUT.f64, per frame and jiggle, the
-// correction (x, y, z, w) and the jiggle point (3).
+// correction (x, y, z, w), the jiggle point (3) and the jiggled world matrix (16).
 // usage: node doc_evaluator_jiggle_check.mjs EXTENSION.json NODE_COUNT POSES.f64 FRAMES.json OUT.f64
 import fs from 'node:fs';
 import { prepareJiggles, startJiggle, hitJiggle, stepJiggle } from './doc_evaluator/jiggles_from_doc.mjs';
@@ -13,15 +13,15 @@ const nodeCount = Number(nodeCountText);
 const bytes = fs.readFileSync(posesPath);
 const poses = new Float64Array(bytes.buffer.slice(bytes.byteOffset, bytes.byteOffset + bytes.byteLength));
 const frames = JSON.parse(fs.readFileSync(framesPath, 'utf8'));
-const out = new Float64Array(frames.length * jiggles.length * 7);
+const out = new Float64Array(frames.length * jiggles.length * 23);
 frames.forEach((frame, f) => {
   const base = f * nodeCount * 16;
   const worldOf = (node) => Array.from(poses.subarray(base + 16 * node, base + 16 * node + 16));
   if (frame.reset) jiggles.forEach((j) => startJiggle(j, worldOf));
   if (frame.hit) hitJiggle(jiggles[frame.hit[0]], frame.hit[1], frame.hit[2]);
   jiggles.forEach((j, k) => {
-    const { correction, point } = stepJiggle(j, worldOf, frame.dt);
-    out.set([...correction, ...point], (f * jiggles.length + k) * 7);
+    const { correction, point, world } = stepJiggle(j, worldOf, frame.dt);
+    out.set([...correction, ...point, ...world], (f * jiggles.length + k) * 23);
   });
 });
 fs.writeFileSync(outPath, Buffer.from(out.buffer));

@@ -203,7 +203,7 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
   const runtime::MuscleRig<double> rig = runtime::convertMuscleRig<double>(file.rig.rig);
   const size_t muscles = rig.muscles.size();
   std::vector<double> poses, expected, nodes, joints(16 * static_cast<size_t>(skeleton.size())), skinned(16 * muscles);
-  std::vector<double> corrections(4 * jiggles), points(3 * jiggles);
+  std::vector<double> corrections(4 * jiggles), points(3 * jiggles), model_matrices(16 * jiggles);
   std::vector<runtime::JiggleState> states(jiggles);
   nlohmann::json frames = nlohmann::json::array();
   const double hit[3] = {0.3, 0.0, 1.0};
@@ -259,10 +259,12 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
       job.states = states;
       job.corrections = corrections;
       job.points = points;
+      job.model_matrices = model_matrices;
       REQUIRE(job.Run());
       for (size_t j = 0; j < jiggles; ++j) {
         expected.insert(expected.end(), corrections.begin() + 4 * j, corrections.begin() + 4 * (j + 1));
         expected.insert(expected.end(), points.begin() + 3 * j, points.begin() + 3 * (j + 1));
+        expected.insert(expected.end(), model_matrices.begin() + 16 * j, model_matrices.begin() + 16 * (j + 1));
       }
     }
   }
@@ -275,8 +277,8 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
   REQUIRE(bytes.size() == expected.size() * sizeof(double));
   std::vector<double> written(expected.size());
   std::memcpy(written.data(), bytes.data(), bytes.size());
-  double point = 0.0, correction = 0.0, largest_angle = 0.0;
-  for (size_t at = 0; at < expected.size(); at += 7) {
+  double point = 0.0, correction = 0.0, matrix_translation = 0.0, matrix_linear = 0.0, largest_angle = 0.0;
+  for (size_t at = 0; at < expected.size(); at += 23) {
     // q and -q are the same rotation.
     double same = 0.0, opposite = 0.0;
     for (int k = 0; k < 4; ++k) {
@@ -285,14 +287,20 @@ TEST_CASE("doc evaluator: the jiggles written from the RIGBAKE_muscle_rig docume
     }
     correction = std::max(correction, std::min(same, opposite));
     for (int k = 4; k < 7; ++k) point = std::max(point, std::abs(written[at + k] - expected[at + k]));
+    for (int k = 0; k < 16; ++k) {
+      double& worst = k >= 12 ? matrix_translation : matrix_linear;
+      worst = std::max(worst, std::abs(written[at + 7 + k] - expected[at + 7 + k]));
+    }
     largest_angle = std::max(largest_angle, 2.0 * std::acos(std::min(1.0, std::abs(expected[at + 3]))) * 180.0 / 3.14159265358979323846);
   }
   std::printf("doc evaluator jiggles vs JiggleJob<double>, sample --jiggle biceps, 30 and 50 fps: %zu frames, %zu jiggles, largest correction %.2f deg; "
-              "largest differences: point %.3g m, correction quaternion %.3g\n",
-              frames.size(), jiggles, largest_angle, point, correction);
+              "largest differences: point %.3g m, correction quaternion %.3g, jiggled world matrix %.3g m, %.3g\n",
+              frames.size(), jiggles, largest_angle, point, correction, matrix_translation, matrix_linear);
   CHECK(largest_angle > 1.0);  // the jiggles moved, so the spring, the hit and the clamp were compared
   CHECK(point <= 1e-5);
   CHECK(correction <= 1e-4);
+  CHECK(matrix_translation <= 1e-5);
+  CHECK(matrix_linear <= 1e-4);
 }
 
 }  // namespace doc_evaluator_test

@@ -6,7 +6,7 @@
 //   const jiggles = prepareJiggles(extension.jiggles);   // settings (10, "Settings") and fresh states
 //   startJiggle(j, worldOf)                                // 10a, a reset at rest
 //   hitJiggle(j, direction, magnitude)                     // "Hits"
-//   const { correction, point } = stepJiggle(j, worldOf, dt);  // 10b-10f for one frame
+//   const { correction, point, world } = stepJiggle(j, worldOf, dt);  // 10b-10g for one frame
 // worldOf(node) returns node's world matrix of the un-jiggled pose (muscle skinned nodes: M of equation 8).
 
 const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
@@ -91,7 +91,7 @@ export function prepareJiggles(items) {
     const gamma = (Math.max(item.clampMinorDeg, 0.01) * Math.PI) / 180;
     const sa = Math.sin(alpha) ** 2, sg = Math.sin(gamma) ** 2;
     return {
-      node: item.node, root: item.rootNode, rootUp: item.rootUp, a, m, n, L, r0: scale(a, L),
+      node: item.node, parent: item.parentNode, root: item.rootNode, rootUp: item.rootUp, a, m, n, L, r0: scale(a, L),
       k: omega * omega, beta: 2 * zeta * omega,
       gx: Math.cos(alpha) ** 2 * sg, gz: Math.cos(gamma) ** 2 * sa, gy: sa * sg, xMax: 1.5 * L,
       state: { started: false, J: [0, 0, 0] },
@@ -201,10 +201,10 @@ function output(j, worldOf, lOut, t, r) {
   const point = add(t, apply(r, q));
   const root = rigidOf(worldOf(j.root));
   const up = applyTransposed(r, apply(root.r, j.rootUp));
-  if ((q[0] === j.r0[0] && q[1] === j.r0[1] && q[2] === j.r0[2]) || (q[0] === 0 && q[1] === 0 && q[2] === 0))
-    return { correction: [0, 0, 0, 1], point };
+  const atRest = q[0] === j.r0[0] && q[1] === j.r0[1] && q[2] === j.r0[2];
+  if (atRest || (q[0] === 0 && q[1] === 0 && q[2] === 0)) return { correction: [0, 0, 0, 1], point, atRest };
   const u = normalize(q), upUnit = normalize(up);
-  if (norm(cross(u, upUnit)) < 1e-6 || norm(cross(j.a, upUnit)) < 1e-6) return { correction: shortestArc(j.a, u), point };
+  if (norm(cross(u, upUnit)) < 1e-6 || norm(cross(j.a, upUnit)) < 1e-6) return { correction: shortestArc(j.a, u), point, atRest };
   const frame = (y) => {
     const w = normalize(cross(y, upUnit));
     return [y, cross(w, y), w];
@@ -212,7 +212,36 @@ function output(j, worldOf, lOut, t, r) {
   const fu = frame(u), fa = frame(j.a);
   // D = F(u) F(a)^T: column c of D is sum_k F(u)_k F(a)_k[c].
   const d = [0, 1, 2].map((col) => add(add(scale(fu[0], fa[0][col]), scale(fu[1], fa[1][col])), scale(fu[2], fa[2][col])));
-  return { correction: quaternionOfColumns(d), point };
+  return { correction: quaternionOfColumns(d), point, atRest };
+}
+
+function quaternionProduct(p, q) {
+  const [px, py, pz, pw] = p, [qx, qy, qz, qw] = q;
+  return [pw * qx + px * qw + py * qz - pz * qy, pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw,
+    pw * qw - px * qx - py * qy - pz * qz];
+}
+
+// 10g: the jiggled world matrix of the node, P · T · (R_local · D) · S with P⁻¹ · W = T · R_local · S.
+function jiggledWorld(j, worldOf, correction, atRest) {
+  const w = worldOf(j.node);
+  if (atRest) return w;
+  const p = j.parent < 0 ? [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1] : worldOf(j.parent);
+  const pc = [0, 1, 2].map((c) => [p[4 * c], p[4 * c + 1], p[4 * c + 2]]);
+  // P⁻¹ = [A⁻¹, −A⁻¹ t]; A⁻¹'s rows are the inverse transpose's columns.
+  const it = inverseTranspose(pc);
+  const inverseApply = (v) => [dot(it[0], v), dot(it[1], v), dot(it[2], v)];
+  const wc = [0, 1, 2].map((c) => [w[4 * c], w[4 * c + 1], w[4 * c + 2]]);
+  const localCols = wc.map(inverseApply);
+  const localT = inverseApply(sub([w[12], w[13], w[14]], [p[12], p[13], p[14]]));
+  const local = [...localCols.flatMap((c) => [...c, 0]), ...localT, 1];
+  const { r, q: rLocal } = rigidOf(local);
+  const sCols = localCols.map((c) => applyTransposed(r, c));  // S = R_localᵀ · (the local linear part)
+  const turned = quaternionProduct(rLocal, correction);
+  const rj = columnsOfQuaternion(turned.map((v) => v / Math.hypot(...turned)));
+  const jiggledCols = sCols.map((c) => apply(rj, c));
+  const worldCols = jiggledCols.map((c) => apply(pc, c));
+  const worldT = add(apply(pc, localT), [p[12], p[13], p[14]]);
+  return [...worldCols.flatMap((c) => [...c, 0]), ...worldT, 1];
 }
 
 // 10b and 10f: one frame of dt seconds (a state not started is started here, no step).
@@ -246,5 +275,6 @@ export function stepJiggle(j, worldOf, dt) {
   s.qLast = q;
   const lambda = 1 + s.since / H;
   const lOut = s.since === 0 ? s.l : add(scale(s.lPrev, 1 - lambda), scale(s.l, lambda));
-  return output(j, worldOf, lOut, t, r);
+  const { correction, point, atRest } = output(j, worldOf, lOut, t, r);
+  return { correction, point, world: jiggledWorld(j, worldOf, correction, atRest) };
 }
