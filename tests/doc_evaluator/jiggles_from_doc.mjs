@@ -9,13 +9,7 @@
 //   const { correction, point, world } = stepJiggle(j, worldOf, dt);  // 10b-10g for one frame
 // worldOf(node) returns node's world matrix of the un-jiggled pose (muscle skinned nodes: M of equation 8).
 
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
-const norm = (a) => Math.sqrt(dot(a, a));
-const normalize = (a) => scale(a, 1 / norm(a));
+import { dot, cross, add, sub, scale, norm, normalize } from './vector.mjs';
 
 const H = 1 / 240;
 const TOL = 1e-9;

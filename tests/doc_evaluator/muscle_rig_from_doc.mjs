@@ -10,13 +10,7 @@
 // matrix M (equation 8), helpers[m] its [base, tip, driver] world matrices (equation 9) or null when the
 // muscle has no helperNodes, drivers[m] its { ratio, clampedRatio, twist }.
 
-const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
-const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
-const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
-const norm = (a) => Math.sqrt(dot(a, a));
-const normalize = (a) => scale(a, 1 / norm(a));
+import { dot, cross, add, sub, scale, norm, normalize } from './vector.mjs';
 
 const column = (m, j) => [m[4 * j], m[4 * j + 1], m[4 * j + 2]];
 const transformPoint = (m, p) => add(add(add(scale(column(m, 0), p[0]), scale(column(m, 1), p[1])), scale(column(m, 2), p[2])), column(m, 3));
