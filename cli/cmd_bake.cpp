@@ -269,6 +269,24 @@ int run(const BakeCommandOptions& options) {
               << through(crease->skinning[0]) << ", dual quaternions " << through(crease->skinning[1]) << ", centres of rotation "
               << through(crease->skinning[2]) << ", rig " << through(crease->skinning[3]) << "\n";
   }
+  // The joint region (pipeline/joint_regions.h) that loses most beyond plain skinning: not fitted, so
+  // it shows what the fitted body regions hide.
+  const ClipQuality* joint_clip = nullptr;
+  size_t joint_region = 0;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    for (size_t r = 0; r < clip.joint_regions.size() && r < bake.quality.joint_regions.size(); ++r) {
+      if (!joint_clip || clip.joint_regions[r].loss > joint_clip->joint_regions[joint_region].loss) {
+        joint_clip = &clip;
+        joint_region = r;
+      }
+    }
+  }
+  if (joint_clip) {
+    const JointRegionLoss& loss = joint_clip->joint_regions[joint_region];
+    std::cerr << std::setprecision(3) << "joint region losing most beyond plain skinning: the skin of '"
+              << bake.quality.joint_regions[joint_region] << "' in '" << joint_clip->clip << "', " << 100.0 * loss.loss
+              << " points (input skinning " << 100.0 * loss.input << " %, rig " << 100.0 * loss.rig << " %, volume about the joint)\n";
+  }
   if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
     const ClipQuality* worst = nullptr;
     for (const ClipQuality& clip : bake.quality.clips)

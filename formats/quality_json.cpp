@@ -69,16 +69,31 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     }
     crease_clips[clip.clip] = per_crease;
   }
+  nlohmann::json joint_region_clips = nlohmann::json::object();
+  for (const ClipQuality& clip : quality.clips) {
+    if (clip.joint_regions.size() != quality.joint_regions.size() || clip.joint_regions.empty()) continue;
+    nlohmann::json per_joint = nlohmann::json::object();
+    for (size_t r = 0; r < clip.joint_regions.size(); ++r) {
+      const JointRegionLoss& loss = clip.joint_regions[r];
+      per_joint[quality.joint_regions[r]] = {{"input_percent", 100.0 * loss.input},
+                                             {"rig_percent", 100.0 * loss.rig},
+                                             {"loss_beyond_input_points", 100.0 * loss.loss},
+                                             {"time_s", loss.time}};
+    }
+    joint_region_clips[clip.clip] = per_joint;
+  }
   return {{"units", {{"volume", "percent change against the bind pose"},
                      {"skin_move", "mm along the input skinning's normal, + out"},
                      {"seam", "mm, largest distance between skin vertices that share a bind position"},
                      {"roughness", "mm, 95th percentile over the moving skin of |umbrella Laplacian . normal| posed minus bind"},
+                     {"joint_region", "the skin whose strongest input joint is the joint, its volume about the joint's posed origin (uncapped): percent change at the sample where the rig loses most beyond the input skinning, and that loss in points"},
                      {"crease", "at the clip's peak bend of each crease: closest approach of opposing skin in mm (null: none within reach), skin vertices through the opposing surface, and the deepest in mm"}}},
           {"seams", {{"places", quality.seam_places}, {"per_clip", seam_clips}}},
           {"surface", {{"per_clip", surface_clips}}},
           {"creases", {{"per_clip", crease_clips}}},
           {"body", {{"bind_volume_m3", quality.body_volume}, {"per_clip", body_clips}}},
           {"regions", regions},
+          {"joint_regions", {{"per_clip", joint_region_clips}}},
           {"unmeasured_regions", quality.unmeasured_regions},
           {"muscles", muscles}};
 }

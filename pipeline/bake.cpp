@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "pipeline/surface_graph.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/joint_regions.h"
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
@@ -465,6 +466,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   if (options.measure_quality) {
     result.quality = std::move(measures.quality);
     measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result.quality);
+    measureJointRegions(character, measured, clips, options.threads, &result.quality);
     measureSurfaceFigures(character, measured, clips, skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
                           &result.quality, options.creases);
   }

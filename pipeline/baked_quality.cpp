@@ -4,6 +4,8 @@
 // peak compression.
 #include "pipeline/baked_quality.h"
 
+#include "pipeline/joint_regions.h"
+
 #include "pipeline/centre_of_rotation.h"
 #include "pipeline/crease_contact.h"
 #include "pipeline/seam_opening.h"
@@ -327,6 +329,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
   measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
+  measureJointRegions(character, parts, clips, options.threads, &out.quality);
   const std::vector<Crease> creases = resolveCreases(folded, landmarks, preset.creases);
   measureSurfaceFigures(character, parts, clips, joint_count, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads,
                         &out.quality, creases);

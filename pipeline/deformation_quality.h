@@ -87,6 +87,14 @@ struct CreaseContact {
   CreaseMethodContact skinning[kSurfaceSkinnings];
 };
 
+// One joint region of one clip (pipeline/joint_regions.h), at the sample where the rig loses most
+// beyond plain skinning: the two volume changes against the bind pose (fractions) and the loss.
+struct JointRegionLoss {
+  double input = 0.0, rig = 0.0;
+  double loss = 0.0;  // max(0, min(input, 0) - rig)
+  double time = 0.0;
+};
+
 struct ClipQuality {
   std::string clip;
   SkinningVolumes body;
@@ -94,6 +102,7 @@ struct ClipQuality {
   SurfaceFigures surface;
   std::vector<CreaseContact> creases;  // the creases this clip bends at least kMinCreaseBend
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
+  std::vector<JointRegionLoss> joint_regions;  // DeformationQuality::joint_regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks
 };
 
@@ -138,6 +147,8 @@ struct DeformationQuality {
   std::vector<std::string> unmeasured_regions;
   std::vector<ClipQuality> clips;
   std::vector<MuscleQuality> muscles;
+  // Joints whose skin is measured as a joint region (pipeline/joint_regions.h), by name.
+  std::vector<std::string> joint_regions;
   int seam_places = 0;  // places where skinned vertices share a bind position (pipeline/seam_opening.h)
 };
 
