@@ -385,10 +385,13 @@ JiggleFigures compareJigglesOn(const std::string& input) {
   CHECK(figures.largest_angle > 1.0);  // the jiggles moved, so the spring, the hit and the clamp were compared
   CHECK(figures.cap_effect > 1e-4);       // the cap changed the long frame: an evaluator without it would differ
   CHECK(figures.velocity_effect > 1e-5);  // the reset's velocity changed what follows
-  CHECK(figures.point <= 1e-5);
-  CHECK(figures.correction <= 1e-4);
-  CHECK(figures.matrix_translation <= 1e-5);
-  CHECK(figures.matrix_linear <= 1e-4);
+  // Both sides step in double from the same numbers, so anything above rounding is a different equation:
+  // reading 10g's S as the full R_localᵀ · (local linear part) instead of its diagonal was 7.2e-8 off on
+  // CesiumMan, whose float-rounded poses give the jiggling nodes' local matrices a shear of that size.
+  CHECK(figures.point <= 1e-9);
+  CHECK(figures.correction <= 1e-9);
+  CHECK(figures.matrix_translation <= 1e-9);
+  CHECK(figures.matrix_linear <= 1e-9);
   return figures;
 }
 

@@ -237,10 +237,12 @@ function jiggledWorld(j, worldOf, correction, atRest) {
   const localT = inverseApply(sub([w[12], w[13], w[14]], [p[12], p[13], p[14]]));
   const local = [...localCols.flatMap((c) => [...c, 0]), ...localT, 1];
   const { r, q: rLocal } = rigidOf(local);
-  const sCols = localCols.map((c) => applyTransposed(r, c));  // S = R_localᵀ · (the local linear part)
+  // S = diag(s), s_c = (column c of R_local) · (column c of the local linear part): 10g's scale along
+  // each rotated axis (whatever shear the local matrix has is dropped).
+  const sDiagonal = [0, 1, 2].map((c) => dot(r[c], localCols[c]));
   const turned = quaternionProduct(rLocal, correction);
   const rj = columnsOfQuaternion(turned.map((v) => v / Math.hypot(...turned)));
-  const jiggledCols = sCols.map((c) => apply(rj, c));
+  const jiggledCols = [0, 1, 2].map((c) => scale(rj[c], sDiagonal[c]));
   const worldCols = jiggledCols.map((c) => apply(pc, c));
   const worldT = add(apply(pc, localT), [p[12], p[13], p[14]]);
   return [...worldCols.flatMap((c) => [...c, 0]), ...worldT, 1];
