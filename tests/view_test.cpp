@@ -336,7 +336,7 @@ struct ViewPage {
 // Bakes `character`, writes its page with the CLI, and the test variant beside it.
 void writeAgreementPage(ViewPage* page, const std::string& character, const std::string& bake_flags,
                         const std::vector<double>& fractions, const std::vector<double>& skin_fractions,
-                        ReferenceCounts* counts) {
+                        int capi_max_frames, ReferenceCounts* counts) {
   page->glb = bakeForView(character, bake_flags, page->dir / "baked.glb");
   page->page_dir = page->dir / "view";
   const test::CliResult view = test::runCli("view " + viewArg(page->glb) + " -o " + viewArg(page->page_dir));
@@ -344,7 +344,7 @@ void writeAgreementPage(ViewPage* page, const std::string& character, const std:
   REQUIRE(view.exit_code == 0);
   const bool with_helpers = bake_flags.find("--helper-joints") != std::string::npos;
   nlohmann::json reference = cppReference(page->glb, fractions, skin_fractions, with_helpers, counts);
-  reference["capi"] = capiFrames(page->glb, 240, counts);
+  reference["capi"] = capiFrames(page->glb, capi_max_frames, counts);
   std::ofstream(page->page_dir + "/reference.js", std::ios::binary)
       << "window.RIGBAKE_REFERENCE = " << reference.dump() << ";\n";
   // The test variant: the page as written plus the reference script.
@@ -387,12 +387,14 @@ nlohmann::json checkRiggerTools(const PageResult& run, double frame_step) {
   return rigger;
 }
 
-// skin_bound: the GPU's packed skinning against rigbake's (issue 31: 1e-6 m for 10 influences).
+// skin_bound: the GPU's packed skinning against rigbake's (issue 31: 1e-6 m for 10 influences);
+// capi_max_frames: how many 30 fps frames of the clips, in their order, the C API comparison runs.
 void checkAgreement(const std::string& label, const std::string& character, const std::string& bake_flags,
-                    const std::vector<double>& fractions, const std::vector<double>& skin_fractions, double skin_bound) {
+                    const std::vector<double>& fractions, const std::vector<double>& skin_fractions, double skin_bound,
+                    int capi_max_frames = 240) {
   ViewPage page;
   ReferenceCounts counts;
-  writeAgreementPage(&page, character, bake_flags, fractions, skin_fractions, &counts);
+  writeAgreementPage(&page, character, bake_flags, fractions, skin_fractions, capi_max_frames, &counts);
   const PageResult run = openPage(page.page_dir + "/test.html", "?test=1", 240);
   checkCleanRun(run);
   checkClipsPlayed(run, counts.clips);
@@ -424,7 +426,7 @@ void checkAgreement(const std::string& label, const std::string& character, cons
   CHECK(rigger["camera_vs_reference_m"].get<double>() < 1e-3);
   std::printf("view agreement %s: default clip %s, scrubbed muscle joints vs C++ %.3g m over %d times, camera target vs C++ %.3g m\n", label.c_str(),
               rigger["defaultClip"].dump().c_str(), rigger["reference_m"].get<double>(), rigger["reference_frames"].get<int>(),
-              rigger["camera_vs_reference_m"].get<double>());
+              rigger.value("camera_vs_reference_m", -1.0));
   // The plugin against the native C API frame by frame, jiggles included (hit at frame 5).
   const nlohmann::json& capi = run.result["capi"];
   INFO(run.result["seconds"].dump());
@@ -669,10 +671,34 @@ TEST_CASE("rigbake view: meshopt and Draco bakes from glTF-Transform with rigbak
   }
 }
 
-TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) and the GPU skinning match rigbake's C++ on the mannequin (Chromium)") {
+// The conformance suite's ROM clips (docs/rom.md, issue 31) ride along on the mannequin: `rigbake rom`
+// appends a forearm twist (the clip that drives the twist curves) and an arm raise (shoulder abduction
+// to 170 degrees) after its three own clips, and all five are compared (61 frames each in the C API run).
+TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) and the GPU skinning match rigbake's C++ on the mannequin and its ROM clips (Chromium)") {
   if (!browserToolsPresent()) return;
-  checkAgreement("mannequin", test::sampleGlbPathForCli(), "--influences 10 --helper-joints --jiggle gow_examples",
-                 {0.0, 0.17, 0.41, 0.63, 0.88}, {0.29, 0.71}, 1e-6);
+  TempDir dir;
+  const std::string rom = dir / "mannequin_rom.glb";
+  const test::CliResult run =
+      test::runCli("rom " + viewArg(test::sampleGlbPathForCli()) + " --clips forearm_twist,shoulder_abduction -o " + viewArg(rom));
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  checkAgreement("mannequin and rom_forearm_twist, rom_shoulder_abduction", rom, "--influences 10 --helper-joints --jiggle gow_examples",
+                 {0.0, 0.17, 0.41, 0.63, 0.88}, {0.29, 0.71}, 1e-6, 5 * 61);
+}
+
+// A clipless character gets its only clips from `rigbake rom`: the KayKit mannequin (no clavicle, no neck
+// joint), its ROM elbow flexion and forearm twist, played and compared as above.
+TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) and the GPU skinning match rigbake's C++ on the clipless KayKit mannequin's ROM clips (Chromium)") {
+  if (!browserToolsPresent()) return;
+  const std::string kaykit = test::requireAsset("KayKit_Mannequin/manny_med_mod.gltf");
+  if (kaykit.empty()) return;
+  TempDir dir;
+  const std::string rom = dir / "kaykit_rom.glb";
+  const test::CliResult run = test::runCli("rom " + viewArg(kaykit) + " --clips elbow_flexion,forearm_twist -o " + viewArg(rom));
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  checkAgreement("KayKit mannequin rom_elbow_flexion, rom_forearm_twist", rom, "--influences 10 --jiggle biceps", {0.0, 0.25, 0.5, 0.75},
+                 {0.5}, 1e-6);
 }
 
 TEST_CASE("rigbake view: the plugin (WebAssembly runtime, muscles and jiggles) and the GPU skinning match rigbake's C++ on CesiumMan (Chromium)") {

@@ -5,8 +5,10 @@
 //
 //   const jiggles = prepareJiggles(extension.jiggles);   // settings (10, "Settings") and fresh states
 //   startJiggle(j, worldOf)                                // 10a, a reset at rest
+//   startJiggle(j, worldOf, { worldOf: other, delta })     // 10a, a reset moving with the target
 //   hitJiggle(j, direction, magnitude)                     // "Hits"
-//   const { correction, point, world } = stepJiggle(j, worldOf, dt);  // 10b-10g for one frame
+//   const { correction, point, world } = stepJiggle(j, worldOf, dt, maxSteps);  // 10b-10g for one frame
+//                                                          // (maxSteps 0 or absent: no cap)
 // worldOf(node) returns node's world matrix of the un-jiggled pose (muscle skinned nodes: M of equation 8).
 
 import { dot, cross, add, sub, scale, norm, normalize } from './vector.mjs';
@@ -130,12 +132,18 @@ function clampToCone(j, q) {
   return [along(lo), true];
 }
 
-// 10a.
-export function startJiggle(j, worldOf) {
+// 10a. `second`, when given, is the same nodes at `delta` seconds from this pose (negative: earlier):
+// the target's velocity ((t₂ − t) + R₂ r0 − R r0) / Δ becomes r'.
+export function startJiggle(j, worldOf, second = null) {
   const { t, q, r } = rigidOf(worldOf(j.node));
   const s = j.state;
+  let rp = [0, 0, 0];
+  if (second) {
+    const other = rigidOf(second.worldOf(j.node));
+    rp = scale(add(sub(other.t, t), sub(apply(other.r, j.r0), apply(r, j.r0))), 1 / second.delta);
+  }
   Object.assign(s, {
-    started: true, x: [0, 0, 0], v: s.J, J: [0, 0, 0], rp: [0, 0, 0], tau: apply(r, j.r0),
+    started: true, x: [0, 0, 0], v: s.J, J: [0, 0, 0], rp, tau: apply(r, j.r0),
     l: [0, 0, 0], lPrev: [0, 0, 0], tLast: t, qLast: q, since: 0,
   });
 }
@@ -229,25 +237,31 @@ function jiggledWorld(j, worldOf, correction, atRest) {
   const localT = inverseApply(sub([w[12], w[13], w[14]], [p[12], p[13], p[14]]));
   const local = [...localCols.flatMap((c) => [...c, 0]), ...localT, 1];
   const { r, q: rLocal } = rigidOf(local);
-  const sCols = localCols.map((c) => applyTransposed(r, c));  // S = R_localᵀ · (the local linear part)
+  // S = diag(s), s_c = (column c of R_local) · (column c of the local linear part): 10g's scale along
+  // each rotated axis (whatever shear the local matrix has is dropped).
+  const sDiagonal = [0, 1, 2].map((c) => dot(r[c], localCols[c]));
   const turned = quaternionProduct(rLocal, correction);
   const rj = columnsOfQuaternion(turned.map((v) => v / Math.hypot(...turned)));
-  const jiggledCols = sCols.map((c) => apply(rj, c));
+  const jiggledCols = [0, 1, 2].map((c) => scale(rj[c], sDiagonal[c]));
   const worldCols = jiggledCols.map((c) => apply(pc, c));
   const worldT = add(apply(pc, localT), [p[12], p[13], p[14]]);
   return [...worldCols.flatMap((c) => [...c, 0]), ...worldT, 1];
 }
 
-// 10b and 10f: one frame of dt seconds (a state not started is started here, no step).
-export function stepJiggle(j, worldOf, dt) {
+// 10b and 10f: one frame of dt seconds (a state not started is started here, no step). With maxSteps > 0
+// and more steps due, exactly maxSteps are taken at φ = m / maxSteps and the rest of the time is dropped.
+export function stepJiggle(j, worldOf, dt, maxSteps = 0) {
   if (!j.state.started) startJiggle(j, worldOf);
   const s = j.state;
   const { t, q } = rigidOf(worldOf(j.node));
-  const steps = Math.floor((s.since + dt + TOL) / H);
+  const due = Math.floor((s.since + dt + TOL) / H);
+  const capped = maxSteps > 0 && due > maxSteps;
+  const steps = capped ? maxSteps : due;
   let lastOnFrame = false;
   for (let m = 1; m <= steps; ++m) {
     let phi = Math.min(1, (m * H - s.since) / dt);
     if (Math.abs(m * H - s.since - dt) <= TOL) phi = 1;
+    if (capped) phi = m / maxSteps;
     let ts, qs;
     const unchanged = t.every((v, i) => v === s.tLast[i]) && q.every((v, i) => v === s.qLast[i]);
     if (phi >= 1 || unchanged) {
@@ -262,7 +276,7 @@ export function stepJiggle(j, worldOf, dt) {
     lastOnFrame = phi >= 1;
     step(j, sub(ts, s.tLast), columnsOfQuaternion(qs));
   }
-  s.since = Math.max(0, s.since + dt - steps * H);
+  s.since = capped ? 0 : Math.max(0, s.since + dt - steps * H);
   const r = columnsOfQuaternion(q);
   s.tau = steps > 0 && lastOnFrame ? apply(r, j.r0) : sub(s.tau, sub(t, s.tLast));
   s.tLast = t;
