@@ -7,7 +7,7 @@
 #pragma once
 
 #include "formats/gltf_document.h"
-#include "pipeline/checks.h"
+#include "pipeline/baked_file.h"
 
 namespace rigbake {
 

@@ -9,7 +9,7 @@
 
 #include "anatomy/character.h"
 #include "anatomy/muscle_set.h"
-#include "pipeline/checks.h"
+#include "pipeline/baked_file.h"
 #include "pipeline/jiggle.h"
 #include "runtime/muscle_rig.h"
 
@@ -47,7 +47,7 @@ void addMuscleRigExtension(tinygltf::Model* model, const Skeleton& skeleton, con
 // The extension of a loaded file, on that file's skeleton: the rig with joint indices of
 // character.skeleton, each muscle's name and skinned joint. `present` is false when the file has none;
 // `problems` lists what is malformed (each "pointer: message"), and then the rig is not usable.
-using LoadedMuscleRig = FileMuscleRig;  // pipeline/checks.h
+using LoadedMuscleRig = FileMuscleRig;  // pipeline/baked_file.h
 LoadedMuscleRig readMuscleRigExtension(const tinygltf::Model& model, const Character& character);
 
 }  // namespace rigbake

@@ -8,7 +8,7 @@
 
 #include <string>
 
-#include "pipeline/checks.h"
+#include "pipeline/check_report.h"
 
 namespace rigbake {
 

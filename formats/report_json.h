@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "pipeline/checks.h"
+#include "pipeline/check_report.h"
 
 namespace rigbake {
 

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "pipeline/checks.h"
+#include "pipeline/check_report.h"
 
 namespace rigbake {
 

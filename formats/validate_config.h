@@ -1,5 +1,5 @@
 // The `rigbake validate --config FILE` format: per check code, a threshold and/or a severity that
-// replace the defaults of pipeline/checks.h. Parsed strictly (formats/json_reader.h): an unknown key or
+// replace the defaults of pipeline/check_registry.h. Parsed strictly (formats/json_reader.h): an unknown key or
 // code is an error naming its JSON pointer, so a typo cannot silently keep a default. docs/validate.md
 // documents it:
 //   {"checks": {"LOCATOR_NEAR_SURFACE": {"threshold": 0.15}, "LOCATOR_SYMMETRY": {"severity": "error"}}}
@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "pipeline/checks.h"
+#include "pipeline/check_registry.h"
 
 namespace rigbake {
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cassert>
 #include <chrono>
+#include <functional>
 
 #include "core/error.h"
 #include "pipeline/surface_graph.h"
@@ -181,6 +182,62 @@ DeformationFigures deformationFigures(const Character& character, const BakeResu
   return errors;
 }
 
+// The muscles' skin weights (bakeCharacter()'s first stage): full-precision weights with the muscles
+// per skinned part, and which vertices of the parts share a place (for the rounding).
+struct MuscleWeights {
+  std::vector<MeasuredPart> measured;  // per skinned part: input and rig weights, full precision
+  std::vector<int> muscle_joints;      // muscle m's skinned joint: skeleton joint (size + m)
+  std::vector<int> weld_of_vertex, first_vertex;
+};
+
+// The rounded weights (bakeCharacter()'s rounding stage). Dequantized, skeleton indices: the weights an
+// engine skins with (the milli ones, or with GltfWeights::kUnorm16 the fine ones) take the place of the
+// full weights in the measured parts, which the volumes are measured with; the full weights move into
+// the result.
+struct RoundedWeights {
+  Approximations milli, fine;
+  std::vector<InfluenceSet> milli_beside;          // unorm16 only: the milli weights beside the fine
+  std::vector<QuantizedInfluences> fine_local;     // unorm16 only: skin-local, for WEIGHTS_n
+};
+
+// Where each muscle takes weight, and from which joint: its carrier, chosen from those shares (into
+// result->muscles). The weights do not depend on the response.
+MuscleWeights weighMuscles(const Character& character, const MuscleSet& muscles, const BakeOptions& options, BakeResult* result);
+
+// The response fit (into result->muscles and result->fit), over poses chosen from every clip's frames
+// where they spread the drivers most.
+void fitResponses(const Character& character, const BakeOptions& options, const std::vector<MeasuredPart>& measured,
+                  BakeResult* result);
+
+// Joints: bind and rest transforms of every muscle's base, tip, driver and skinned joint.
+void bakeMuscleJoints(const Skeleton& skeleton, const runtime::MuscleRig<double>& rig, BakeResult* result);
+
+// Clips: every baked joint's local TRS (only written as channels when the motion is sampled), every
+// muscle's length ratio and jiggles (into result->clips), and the skin matrices of every sampled frame
+// (returned, per clip: for the rounding of the weights and for the deformation error). The inverse
+// bind matrices are formed once (the same products as skinMatrix() forms per frame).
+std::vector<std::vector<SkinFrame>> sampleBakedClips(const Character& character, const runtime::MuscleRig<double>& rig,
+                                                     const BakeOptions& options, BakeResult* result);
+
+// Every part pruned, then rounded together against every frame (they share the moments of their
+// joints' motion), into result->parts with skin-local indices (the file's joint list, then the
+// muscles' skinned joints). `lap` gives the seconds since it was last called, for `timing`.
+void roundWeights(const Character& character, const BakeOptions& options, const MuscleWeights& weights,
+                  std::vector<std::vector<SkinFrame>>* clip_frames, std::vector<MeasuredPart>* measured,
+                  const std::function<double()>& lap, BakeTimings* timing, RoundedWeights* rounded, BakeResult* result);
+
+// One pass over every frame for the deformation error of the pruned, quantized weights against the
+// full-precision ones and, measured with the weights written as an engine skins them, the volumes
+// (result->quality, result->error, result->gltf_error).
+void measureBakeFigures(const Character& character, const BakeOptions& options, double body_height,
+                        const std::vector<MeasuredPart>& measured,
+                        const RoundedWeights& rounded, const std::vector<std::vector<SkinFrame>>& clip_frames,
+                        const std::function<double()>& lap, BakeTimings* timing, BakeResult* result);
+
+// The written attributes and packed buffers last: built before the figures, they were 7 MB of the
+// bake's peak at 100k vertices, which the figures' skinning batches set.
+void packWeights(const BakeOptions& options, RoundedWeights* rounded, BakeResult* result);
+
 }  // namespace
 
 BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options,
@@ -214,10 +271,34 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   result.motion = options.motion;
   result.helper_joints = options.helper_joints;
   result.jiggles = options.jiggles;
-  const int muscle_count = static_cast<int>(muscles.parts.size());
   const double body_height = muscles.body_height;
 
-  // Where each muscle takes weight, and from which joint: its carrier, chosen from those shares.
+  MuscleWeights weights = weighMuscles(character, muscles, options, &result);
+  timing.weights += lap();
+  fitResponses(character, options, weights.measured, &result);
+  timing.fit = lap();
+  const runtime::MuscleRig<double> rig = buildMuscleRig(result.muscles, skeleton);
+  reportProgress(options.progress, "sampling every clip");
+  bakeMuscleJoints(skeleton, rig, &result);
+  std::vector<std::vector<SkinFrame>> clip_frames = sampleBakedClips(character, rig, options, &result);
+  timing.evaluate = lap();
+  result.gltf_weights = options.gltf_weights;
+  RoundedWeights rounded;
+  roundWeights(character, options, weights, &clip_frames, &weights.measured, lap, &timing, &rounded, &result);
+  timing.weights += lap();
+  measureBakeFigures(character, options, body_height, weights.measured, rounded, clip_frames, lap, &timing, &result);
+  reportProgress(options.progress, "packing the weights");
+  packWeights(options, &rounded, &result);
+  timing.pack += lap();
+  return result;
+}
+
+namespace {
+
+MuscleWeights weighMuscles(const Character& character, const MuscleSet& muscles, const BakeOptions& options, BakeResult* result) {
+  const Skeleton& skeleton = character.skeleton;
+  const int muscle_count = static_cast<int>(muscles.parts.size());
+  const double body_height = muscles.body_height;
   reportProgress(options.progress, "weighting the muscles' skin");
   const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height, options.threads);
   // One welded surface over every skinned part, so a border between meshes gets one muscle weight
@@ -225,15 +306,12 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   BodySurface body = buildBodySurface(character, 1e-6 * std::max(body_height, 1e-3));
   MuscleShares shares =
       muscleShares(skeleton, body.skin(character), body.graph, muscles, radii, options.weights, options.threads);
-  result.muscles = muscles;
-  chooseCarrierJoints(character, body, shares, &result.muscles);
-  const MuscleSet& rigged = result.muscles;
-  // A muscle's skinned joint is skeleton joint (size + m) in the influences below.
-  std::vector<int> muscle_joints(muscle_count);
-  for (int m = 0; m < muscle_count; ++m) muscle_joints[m] = skeleton.size() + m;
-
-  // Full-precision weights with the muscles, per skinned part: they do not depend on the response.
-  std::vector<MeasuredPart> measured;
+  result->muscles = muscles;
+  chooseCarrierJoints(character, body, shares, &result->muscles);
+  const MuscleSet& rigged = result->muscles;
+  MuscleWeights out;
+  out.muscle_joints.resize(muscle_count);
+  for (int m = 0; m < muscle_count; ++m) out.muscle_joints[m] = skeleton.size() + m;
   for (size_t s = 0; s < body.mesh_part.size(); ++s) {
     const MeshPart& mesh = character.meshes[body.mesh_part[s]];
     InfluenceSet base = influencesFromMesh(mesh);
@@ -242,58 +320,58 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     MeasuredPart part;
     part.mesh_part = body.mesh_part[s];
     part.input = normalizedInfluences(base, options.threads);
-    part.rig = normalizedInfluences(addMuscleInfluences(part.input, body.partWelds(s), shares, rigged, muscle_joints,
+    part.rig = normalizedInfluences(addMuscleInfluences(part.input, body.partWelds(s), shares, rigged, out.muscle_joints,
                                                         options.weights, options.threads),
                                     options.threads);
-    measured.push_back(std::move(part));
+    out.measured.push_back(std::move(part));
   }
-  // Which vertices of the parts share a place, for the rounding below; the rest of the surface and the
+  // Which vertices of the parts share a place, for the rounding; the rest of the surface and the
   // weight shares are done with: freed before the fit and the figures, whose peak they would otherwise
   // add to (2.9 MB at 100k vertices).
-  const std::vector<int> weld_of_vertex = std::move(body.graph.weld_of_vertex);
-  const std::vector<int> first_vertex = std::move(body.first_vertex);
-  body = BodySurface{};
-  shares = MuscleShares{};
-  timing.weights += lap();
+  out.weld_of_vertex = std::move(body.graph.weld_of_vertex);
+  out.first_vertex = std::move(body.first_vertex);
+  return out;
+}
 
-  // The response fit, over poses chosen from every clip's frames where they spread the drivers most.
+void fitResponses(const Character& character, const BakeOptions& options, const std::vector<MeasuredPart>& measured,
+                  BakeResult* result) {
+  const Skeleton& skeleton = character.skeleton;
+  const MuscleSet& rigged = result->muscles;
+  const int muscle_count = static_cast<int>(rigged.parts.size());
   std::vector<char> fit_part(muscle_count, 0);
   for (int m = 0; m < muscle_count; ++m)
     fit_part[m] = options.response == ResponseMode::kFit ||
                   (options.response == ResponseMode::kAuto && hasPresetResponse(rigged.parts[m]));
-  if (std::find(fit_part.begin(), fit_part.end(), 1) != fit_part.end() && !character.clips.empty()) {
-    std::vector<std::pair<int, double>> samples;
-    for (size_t c = 0; c < character.clips.size(); ++c)
-      for (double time : sampleTimes(character.clips[c], options.fps)) samples.emplace_back(static_cast<int>(c), time);
-    const size_t wanted = static_cast<size_t>(std::max(1, options.fit.max_poses));
-    std::vector<std::vector<double>> features;
-    if (samples.size() > wanted) {
-      const runtime::MuscleRig<double> start = buildMuscleRig(rigged, skeleton);
-      for (const auto& [clip, time] : samples)
-        features.push_back(driverFeatures(start, rigged, fit_part, sampleClip(skeleton, character.clips[clip], time)));
-    } else {
-      features.resize(samples.size());
-    }
-    std::vector<Pose> poses;
-    for (size_t i : chooseFitPoses(features, wanted)) poses.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
-    // The prior keeps the weight it has against every frame (up to prior_poses of them) when the fit
-    // takes fewer.
-    ResponseFitOptions fit_options = options.fit;
-    if (!fit_options.progress) fit_options.progress = options.progress;
-    fit_options.pose_weight =
-        static_cast<double>(std::min(samples.size(), static_cast<size_t>(std::max(1, fit_options.prior_poses)))) / poses.size();
-    result.fit =
-        fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result.muscles, fit_options, options.threads);
+  if (std::find(fit_part.begin(), fit_part.end(), 1) == fit_part.end() || character.clips.empty()) return;
+  std::vector<std::pair<int, double>> samples;
+  for (size_t c = 0; c < character.clips.size(); ++c)
+    for (double time : sampleTimes(character.clips[c], options.fps)) samples.emplace_back(static_cast<int>(c), time);
+  const size_t wanted = static_cast<size_t>(std::max(1, options.fit.max_poses));
+  std::vector<std::vector<double>> features;
+  if (samples.size() > wanted) {
+    const runtime::MuscleRig<double> start = buildMuscleRig(rigged, skeleton);
+    for (const auto& [clip, time] : samples)
+      features.push_back(driverFeatures(start, rigged, fit_part, sampleClip(skeleton, character.clips[clip], time)));
+  } else {
+    features.resize(samples.size());
   }
-  timing.fit = lap();
-  const runtime::MuscleRig<double> rig = buildMuscleRig(rigged, skeleton);
+  std::vector<Pose> poses;
+  for (size_t i : chooseFitPoses(features, wanted)) poses.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
+  // The prior keeps the weight it has against every frame (up to prior_poses of them) when the fit
+  // takes fewer.
+  ResponseFitOptions fit_options = options.fit;
+  if (!fit_options.progress) fit_options.progress = options.progress;
+  fit_options.pose_weight =
+      static_cast<double>(std::min(samples.size(), static_cast<size_t>(std::max(1, fit_options.prior_poses)))) / poses.size();
+  result->fit = fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result->muscles, fit_options, options.threads);
+}
 
-  // Joints: bind and rest transforms.
-  reportProgress(options.progress, "sampling every clip");
+void bakeMuscleJoints(const Skeleton& skeleton, const runtime::MuscleRig<double>& rig, BakeResult* result) {
+  const MuscleSet& rigged = result->muscles;
   const Pose rest = restPose(skeleton);
   const RigEvaluation at_bind = evaluateRig(rig, bindPose(skeleton), true);
   const RigEvaluation at_rest = evaluateRig(rig, rest, true);
-  for (int m = 0; m < muscle_count; ++m) {
+  for (int m = 0; m < static_cast<int>(rigged.parts.size()); ++m) {
     const MusclePart& part = rigged.parts[m];
     for (MuscleJointRole role : kRoles) {
       BakedJoint joint;
@@ -303,19 +381,22 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       joint.parent = parentOf(part, role);
       joint.bind_world = role == MuscleJointRole::kSkinned ? muscleBindTransform(part, skeleton) : roleWorld(at_bind, m, role);
       joint.rest_local = localTrs(roleWorld(at_rest, m, role), rest, joint.parent);
-      if (role == MuscleJointRole::kSkinned) result.skinned_joint_of_muscle.push_back(static_cast<int>(result.joints.size()));
-      result.joints.push_back(joint);
+      if (role == MuscleJointRole::kSkinned) result->skinned_joint_of_muscle.push_back(static_cast<int>(result->joints.size()));
+      result->joints.push_back(joint);
     }
   }
-  // Clips: every baked joint's local TRS (only written as channels when the motion is sampled),
-  // every muscle's length ratio, and the skin matrices of every sampled frame (for the rounding of the
-  // weights and for the deformation error). The inverse bind matrices are formed once (the same
-  // products as skinMatrix() forms per frame).
+}
+
+std::vector<std::vector<SkinFrame>> sampleBakedClips(const Character& character, const runtime::MuscleRig<double>& rig,
+                                                     const BakeOptions& options, BakeResult* result) {
+  const Skeleton& skeleton = character.skeleton;
+  const MuscleSet& rigged = result->muscles;
+  const int muscle_count = static_cast<int>(rigged.parts.size());
   const bool sampled = options.motion != MuscleMotion::kRuntime;
   std::vector<Eigen::Affine3d> inverse_bind(static_cast<size_t>(skeleton.size()));
   for (int j = 0; j < skeleton.size(); ++j) inverse_bind[j] = skeleton.bind_world[j].inverse();
   std::vector<Eigen::Affine3d> inverse_muscle_bind(static_cast<size_t>(muscle_count));
-  for (int m = 0; m < muscle_count; ++m) inverse_muscle_bind[m] = result.joints[result.skinned_joint_of_muscle[m]].bind_world.inverse();
+  for (int m = 0; m < muscle_count; ++m) inverse_muscle_bind[m] = result->joints[result->skinned_joint_of_muscle[m]].bind_world.inverse();
   std::vector<std::vector<SkinFrame>> clip_frames;
   for (const Clip& clip : character.clips) {
     BakedClip baked;
@@ -348,70 +429,66 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       baked.ratio.push_back(std::move(ratios));
       frames.push_back(std::move(skin));
     }
-    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, rigged, clip, poses, options, result, &baked, &frames);
+    if (!options.jiggles.empty()) baked.jiggles = bakeJiggles(skeleton, rigged, clip, poses, options, *result, &baked, &frames);
     clip_frames.push_back(std::move(frames));
-    result.clips.push_back(std::move(baked));
+    result->clips.push_back(std::move(baked));
   }
-  timing.evaluate = lap();
+  return clip_frames;
+}
+
+void roundWeights(const Character& character, const BakeOptions& options, const MuscleWeights& weights,
+                  std::vector<std::vector<SkinFrame>>* clip_frames, std::vector<MeasuredPart>* measured,
+                  const std::function<double()>& lap, BakeTimings* timing, RoundedWeights* rounded, BakeResult* result) {
+  const Skeleton& skeleton = character.skeleton;
+  const int muscle_count = static_cast<int>(weights.muscle_joints.size());
+  const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
+  rounded->milli_beside.resize(unorm16 ? measured->size() : 0);
+  rounded->fine_local.resize(unorm16 ? measured->size() : 0);
   // The rounding reads every clip's frames as one list: moved there and back after it, not copied (a
   // copy was a quarter of the bake's peak memory on a character with 22 clips).
   std::vector<SkinFrame> all_frames;
-  for (std::vector<SkinFrame>& frames : clip_frames) {
+  for (std::vector<SkinFrame>& frames : *clip_frames) {
     for (SkinFrame& frame : frames) all_frames.push_back(std::move(frame));
   }
-
-  // Weights per skinned part.
-  const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
-  result.gltf_weights = options.gltf_weights;
-  // Dequantized, skeleton indices. The weights an engine skins with (the milli ones, or with
-  // GltfWeights::kUnorm16 the fine ones) take the place of the full weights in `measured`, which the
-  // volumes are measured with; the full weights move into the result.
-  Approximations milli, fine;
-  std::vector<InfluenceSet> milli_beside(unorm16 ? measured.size() : 0);
-  std::vector<QuantizedInfluences> fine_local(unorm16 ? measured.size() : 0);  // skin-local, for WEIGHTS_n
-  // Every part pruned, then rounded together (they share the moments of their joints' motion).
   reportProgress(options.progress, "rounding the weights against every frame");
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
-  for (const MeasuredPart& weights : measured) pruned_parts.push_back(pruneInfluences(weights.rig, options.influences, options.threads));
-  for (size_t a = 0; a < measured.size(); ++a)
-    motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[measured[a].mesh_part].positions});
+  for (const MeasuredPart& part : *measured) pruned_parts.push_back(pruneInfluences(part.rig, options.influences, options.threads));
+  for (size_t a = 0; a < measured->size(); ++a)
+    motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[(*measured)[a].mesh_part].positions});
   std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
-  shareSeamRoundings(weld_of_vertex, first_vertex, pruned_parts, &quantized_parts);
+  shareSeamRoundings(weights.weld_of_vertex, weights.first_vertex, pruned_parts, &quantized_parts);
   {
     size_t next = 0;
-    for (std::vector<SkinFrame>& frames : clip_frames) {
+    for (std::vector<SkinFrame>& frames : *clip_frames) {
       for (SkinFrame& frame : frames) frame = std::move(all_frames[next++]);
     }
     std::vector<SkinFrame>().swap(all_frames);
   }
-  for (size_t a = 0; a < measured.size(); ++a) {
-    const MeasuredPart& weights = measured[a];
-    const size_t p = static_cast<size_t>(weights.mesh_part);
+  for (size_t a = 0; a < measured->size(); ++a) {
+    const size_t p = static_cast<size_t>((*measured)[a].mesh_part);
     // (The fit is done: `measured` now changes to what the volumes are measured with.)
     const MeshPart& mesh = character.meshes[p];
     BakedPart baked;
-    baked.mesh_part = weights.mesh_part;
-    baked.full = std::move(measured[a].rig);
+    baked.mesh_part = (*measured)[a].mesh_part;
+    baked.full = std::move((*measured)[a].rig);
     QuantizedInfluences quantized = std::move(quantized_parts[a]);
     const QuantizedInfluences quantized_fine =
         unorm16 ? quantizeInfluences(pruned_parts[a], kUnsignedShortScale, options.threads) : QuantizedInfluences{};
     InfluenceSet().joints.swap(pruned_parts[a].joints);
     std::vector<double>().swap(pruned_parts[a].weights);
-    timing.weights += lap();
+    timing->weights += lap();
     if (unorm16) {
-      milli_beside[a] = dequantizeInfluences(quantized, options.threads);
-      measured[a].rig = dequantizeInfluences(quantized_fine, options.threads);
-      milli.emplace_back(static_cast<int>(p), &milli_beside[a]);
-      fine.emplace_back(static_cast<int>(p), &measured[a].rig);
+      rounded->milli_beside[a] = dequantizeInfluences(quantized, options.threads);
+      (*measured)[a].rig = dequantizeInfluences(quantized_fine, options.threads);
+      rounded->milli.emplace_back(static_cast<int>(p), &rounded->milli_beside[a]);
+      rounded->fine.emplace_back(static_cast<int>(p), &(*measured)[a].rig);
     } else {
-      measured[a].rig = dequantizeInfluences(quantized, options.threads);
-      milli.emplace_back(static_cast<int>(p), &measured[a].rig);
+      (*measured)[a].rig = dequantizeInfluences(quantized, options.threads);
+      rounded->milli.emplace_back(static_cast<int>(p), &(*measured)[a].rig);
     }
-
-    // Skin-local indices: the file's joint list, then the muscles' skinned joints.
     baked.skin_joints = mesh.skin_joints;
-    baked.skin_joints.insert(baked.skin_joints.end(), muscle_joints.begin(), muscle_joints.end());
+    baked.skin_joints.insert(baked.skin_joints.end(), weights.muscle_joints.begin(), weights.muscle_joints.end());
     std::vector<int> local_of(skeleton.size() + muscle_count, -1);
     for (size_t k = 0; k < baked.skin_joints.size(); ++k) {
       if (local_of[baked.skin_joints[k]] < 0) local_of[baked.skin_joints[k]] = static_cast<int>(k);
@@ -430,28 +507,32 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
       return influences;
     };
     baked.quantized = skinLocal(std::move(quantized));
-    if (unorm16) fine_local[a] = skinLocal(quantized_fine);
-    timing.pack += lap();
-    result.vertex_count += baked.quantized.vertexCount();
-    result.parts.push_back(std::move(baked));
+    if (unorm16) rounded->fine_local[a] = skinLocal(quantized_fine);
+    timing->pack += lap();
+    result->vertex_count += baked.quantized.vertexCount();
+    result->parts.push_back(std::move(baked));
   }
+}
 
-  timing.weights += lap();
-  // One pass over every frame for the deformation error of the pruned, quantized weights against the
-  // full-precision ones and, measured with the weights written as an engine skins them, the volumes.
+void measureBakeFigures(const Character& character, const BakeOptions& options, double body_height,
+                        const std::vector<MeasuredPart>& measured,
+                        const RoundedWeights& rounded, const std::vector<std::vector<SkinFrame>>& clip_frames,
+                        const std::function<double()>& lap, BakeTimings* timing, BakeResult* result) {
+  const MuscleSet& rigged = result->muscles;
+  const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
   std::vector<std::vector<ErrorWeights>> error_weights(unorm16 ? 2 : 1);
   for (size_t a = 0; a < measured.size(); ++a) {
-    error_weights[0].push_back(ErrorWeights{&result.parts[a].full, milli[a].second});
-    if (unorm16) error_weights[1].push_back(ErrorWeights{&result.parts[a].full, fine[a].second});
+    error_weights[0].push_back(ErrorWeights{&result->parts[a].full, rounded.milli[a].second});
+    if (unorm16) error_weights[1].push_back(ErrorWeights{&result->parts[a].full, rounded.fine[a].second});
   }
   std::vector<MeasuredClip> clips;
-  for (size_t c = 0; c < result.clips.size(); ++c) {
+  for (size_t c = 0; c < result->clips.size(); ++c) {
     MeasuredClip clip;
-    clip.name = result.clips[c].name;
-    clip.times = result.clips[c].times;
+    clip.name = result->clips[c].name;
+    clip.times = result->clips[c].times;
     clip.frames = &clip_frames[c];
     if (options.measure_quality) {
-      for (const std::vector<double>& ratios : result.clips[c].ratio) {
+      for (const std::vector<double>& ratios : result->clips[c].ratio) {
         std::vector<double> clamped(ratios.size());
         for (size_t m = 0; m < ratios.size(); ++m)
           clamped[m] = std::clamp(ratios[m], rigged.parts[m].compression, rigged.parts[m].stretch);
@@ -464,31 +545,31 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
                                                     options.measure_quality, error_weights, options.threads);
   if (options.measure_quality) {
-    result.quality = std::move(measures.quality);
-    measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result.quality);
-    measureJointRegions(character, measured, clips, options.threads, &result.quality);
-    measureSurfaceFigures(character, measured, clips, skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
-                          &result.quality, options.creases);
+    result->quality = std::move(measures.quality);
+    measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result->quality);
+    measureJointRegions(character, measured, clips, options.threads, &result->quality);
+    measureSurfaceFigures(character, measured, clips, character.skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
+                          &result->quality, options.creases);
   }
-  timing.quality = lap();
-  result.error = deformationFigures(character, result, milli, measures.screened[0], clip_frames, options.threads);
-  if (unorm16) result.gltf_error = deformationFigures(character, result, fine, measures.screened[1], clip_frames, options.threads);
-  timing.error = lap();
+  timing->quality = lap();
+  result->error = deformationFigures(character, *result, rounded.milli, measures.screened[0], clip_frames, options.threads);
+  if (unorm16)
+    result->gltf_error = deformationFigures(character, *result, rounded.fine, measures.screened[1], clip_frames, options.threads);
+  timing->error = lap();
+}
 
-  reportProgress(options.progress, "packing the weights");
-  // The written attributes and packed buffers last: built before the figures, they were 7 MB of the
-  // bake's peak at 100k vertices, which the figures' skinning batches set.
-  for (size_t a = 0; a < result.parts.size(); ++a) {
-    BakedPart& baked = result.parts[a];
+void packWeights(const BakeOptions& options, RoundedWeights* rounded, BakeResult* result) {
+  const bool unorm16 = options.gltf_weights == GltfWeights::kUnorm16;
+  for (size_t a = 0; a < result->parts.size(); ++a) {
+    BakedPart& baked = result->parts[a];
     const int skin_size = static_cast<int>(baked.skin_joints.size());
-    baked.standard = standardSkinAttributes(unorm16 ? fine_local[a] : baked.quantized, skin_size, WeightStorage::kUnsignedShort,
+    baked.standard = standardSkinAttributes(unorm16 ? rounded->fine_local[a] : baked.quantized, skin_size, WeightStorage::kUnsignedShort,
                                             options.threads);
-    if (unorm16) fine_local[a] = QuantizedInfluences{};
+    if (unorm16) rounded->fine_local[a] = QuantizedInfluences{};
     baked.packed = packInfluences(baked.quantized, skin_size, packedIndexBytesFor(skin_size));
     baked.packed_attributes = packedGltfAttributes(baked.packed);
   }
-  timing.pack += lap();
-  return result;
 }
 
+}  // namespace
 }  // namespace rigbake

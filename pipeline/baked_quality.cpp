@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 
 #include "pipeline/influences.h"
@@ -214,6 +215,263 @@ void addCreasePictureRequests(const DeformationQuality& quality, const std::vect
     requests.push_back(std::move(request));
   }
 }
+// The skinned muscle joints and their carriers: from the extension when it is usable (`with_rig`), else
+// from the muscle nodes' extras; "" or why the file cannot be measured.
+std::string fileMuscles(const Skeleton& skeleton, const BakedFileData& file, bool with_rig, std::vector<FileMuscle>* muscles) {
+  const int joint_count = skeleton.size();
+  if (with_rig) {
+    for (size_t m = 0; m < file.rig.skinned_joint.size(); ++m)
+      muscles->push_back({file.rig.names[m], file.rig.skinned_joint[m], file.rig.rig.muscles[m].carrier_joint, static_cast<int>(m)});
+  } else {
+    for (const FileMuscleNode& node : file.muscle_nodes) {
+      if (node.role != "skinned") continue;
+      const int carrier = node.carrier_joint.empty() ? -1 : skeleton.find(node.carrier_joint);
+      if (carrier < 0) return "muscle node '" + node.name + "' does not name its carrier joint (a bake older than the carrier weights)";
+      muscles->push_back({node.muscle, skeleton.find(node.name), carrier, -1});
+    }
+  }
+  if (muscles->empty()) return "the file has no skinned muscle joints";
+  for (const FileMuscle& muscle : *muscles) {
+    if (muscle.joint < 0 || muscle.carrier < 0 || muscle.carrier >= joint_count)
+      return "muscle '" + muscle.name + "' has no skinned joint or carrier in the skeleton";
+  }
+  return "";
+}
+
+// Every skinned part with positions, in order (BodyRegion::triangles is indexed the same way): the input
+// skinning's weights (each muscle's folded onto its carrier) and the rig's (relabelled by `rig_label`),
+// and the character as the input skinning sees it in *folded (regions are cut on these weights). "" or
+// why the file cannot be measured.
+std::string measuredParts(const Character& character, const std::vector<int>& fold, const std::vector<int>& rig_label,
+                          Character* folded, std::vector<MeasuredPart>* parts) {
+  const int joint_count = character.skeleton.size();
+  for (size_t p = 0; p < character.meshes.size(); ++p) {
+    const MeshPart& mesh = character.meshes[p];
+    if (!mesh.skinned || mesh.positions.empty()) continue;
+    const InfluenceSet file_weights = influencesFromMesh(mesh);
+    if (!checkInfluences(file_weights, joint_count).empty()) return "mesh '" + mesh.name + "' has invalid skin weights (WEIGHTS_* checks)";
+    MeasuredPart part;
+    part.mesh_part = static_cast<int>(p);
+    part.input = normalizedInfluences(foldInfluences(file_weights, fold));
+    part.rig = normalizedInfluences(foldInfluences(file_weights, rig_label));
+    folded->meshes[p].joints = part.input.joints;
+    folded->meshes[p].weights = part.input.weights;
+    folded->meshes[p].influences_per_vertex = part.input.slots_per_vertex;
+    parts->push_back(std::move(part));
+  }
+  if (parts->empty()) return "no skinned mesh with valid weights and triangles";
+  return "";
+}
+
+// Every clip's sample times with the skin matrices (the skeleton's, then the measured muscles' skinned
+// joints again at joint_count + m) into *frames, one list per clip (the rest pose for a character
+// without clips), and each measured muscle's clamped length ratio there.
+std::vector<MeasuredClip> measuredClips(const Character& character, const BakedFileData& file, const std::vector<FileMuscle>& muscles,
+                                        int measured_muscles, std::vector<std::vector<SkinFrame>>* frames) {
+  const Skeleton& skeleton = character.skeleton;
+  frames->assign(std::max<size_t>(character.clips.size(), 1), {});
+  std::vector<MeasuredClip> clips;
+  auto addClip = [&](const Clip* clip, size_t c) {
+    MeasuredClip measured;
+    measured.name = clip ? clip->name : "(rest pose)";
+    measured.times = clip ? sampleTimes(*clip, 0.0) : std::vector<double>{};
+    if (measured.times.empty()) measured.times.push_back(0.0);
+    for (double t : measured.times) {
+      const Pose pose = clip ? sampleClip(skeleton, *clip, t) : restPose(skeleton);
+      std::vector<Eigen::Affine3d> frame = bakedSkinMatrices(character, file, pose);
+      for (int m = 0; m < measured_muscles; ++m) frame.push_back(frame[muscles[m].joint]);
+      (*frames)[c].push_back(std::move(frame));
+      std::vector<double> ratio(measured_muscles, 1.0);
+      if (measured_muscles > 0) {
+        const RigEvaluation evaluation = evaluateRig(file.rig.rig, pose, false);
+        for (int m = 0; m < measured_muscles; ++m) ratio[m] = evaluation.drivers[muscles[m].rig_index].clamped_ratio;
+      }
+      measured.ratio.push_back(std::move(ratio));
+    }
+    measured.frames = &(*frames)[c];
+    clips.push_back(std::move(measured));
+  };
+  for (size_t c = 0; c < character.clips.size(); ++c) addClip(&character.clips[c], c);
+  if (character.clips.empty()) addClip(nullptr, 0);
+  return clips;
+}
+
+// What the pictures read: the parts drawn, the frames and clips measured, and the centres of rotation
+// (filled before a crease's picture is drawn).
+struct PictureScene {
+  const LandmarkSet& landmarks;
+  const BakedQualityOptions& options;
+  const std::vector<PicturePart>& drawn;
+  const std::vector<std::vector<SkinFrame>>& frames;
+  const std::vector<MeasuredClip>& clips;
+  const std::vector<RotationCentres>& centres;
+};
+
+// The clip's sample nearest `time`.
+size_t sampleIndex(const MeasuredClip& clip, double time) {
+  const std::vector<double>& times = clip.times;
+  size_t best = 0;
+  for (size_t t = 1; t < times.size(); ++t)
+    if (std::abs(times[t] - time) < std::abs(times[best] - time)) best = t;
+  return best;
+}
+
+// Seen across the subject's long axis (a limb from the side, not end on). When the skin around it lies
+// in a plane (a bent elbow, a raised arm against the torso), from that plane's normal, so the bend
+// shows; otherwise from where the subject's skin faces (a muscle's patch), else from the front.
+Camera pictureCamera(const LandmarkSet& landmarks, const std::vector<std::vector<Eigen::Vector3d>>& rig,
+                     const std::function<bool(size_t, int)>& subject, const Eigen::Vector3d& centre, const Eigen::Vector3d& facing,
+                     int count, double radius) {
+  Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), around = Eigen::Matrix3d::Zero();
+  for (size_t p = 0; p < rig.size(); ++p) {
+    for (size_t w = 0; w < rig[p].size(); ++w) {
+      const Eigen::Vector3d d = rig[p][w] - centre;
+      if (subject(p, static_cast<int>(w))) spread += d * d.transpose();
+      if (d.norm() <= 1.5 * radius) around += d * d.transpose();
+    }
+  }
+  const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvectors().col(2);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> plane(around);
+  auto across = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(d - d.dot(axis) * axis); };
+  Eigen::Vector3d view = Eigen::Vector3d::Zero();
+  if (plane.eigenvalues()[1] > 3.0 * plane.eigenvalues()[0]) {
+    view = plane.eigenvectors().col(0);
+    const Eigen::Vector3d toward = facing.norm() > 0.3 * count ? facing : landmarks.body.forward;
+    if (view.dot(toward) < 0.0) view = -view;
+  } else if (facing.norm() > 0.3 * count) {
+    view = across(facing);
+  }
+  if (view.norm() < 1e-6) view = across(landmarks.body.forward);
+  if (view.norm() < 1e-6) view = across(landmarks.body.lateral);
+  view.normalize();
+  Eigen::Vector3d up = landmarks.body.up - landmarks.body.up.dot(view) * view;
+  if (up.norm() < 1e-6) up = axis - axis.dot(view) * view;
+  Camera camera;
+  camera.centre = centre;
+  camera.forward = -view;
+  camera.up = up.normalized();
+  camera.half_height = std::max(1.3 * radius, 0.05 * landmarks.body.height);
+  return camera;
+}
+
+// Draws one request into `drawn_picture`; false when it frames nothing.
+bool drawPicture(const PictureScene& scene, const PictureRequest& request, QualityPicture* drawn_picture) {
+  const std::vector<PicturePart>& drawn = scene.drawn;
+  const LandmarkSet& landmarks = scene.landmarks;
+  const size_t c = request.clip;
+  auto subject = [&request](size_t p, int w) { return request.on[p][static_cast<size_t>(w)] != 0; };
+  const size_t sample = sampleIndex(scene.clips[c], request.time);
+  const SkinFrame& frame = scene.frames[c][sample];
+  std::vector<std::vector<Eigen::Vector3d>> input(drawn.size()), rig(drawn.size()), normals(drawn.size());
+  std::vector<std::vector<double>> along(drawn.size());
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero(), facing = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (size_t p = 0; p < drawn.size(); ++p) {
+    const PicturePart& part = drawn[p];
+    input[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame));
+    rig[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame));
+    normals[p] = vertexNormals(part.surface.whole, input[p]);
+    along[p].resize(input[p].size());
+    for (size_t w = 0; w < input[p].size(); ++w) {
+      along[p][w] = (rig[p][w] - input[p][w]).dot(normals[p][w]);
+      if (!subject(p, static_cast<int>(w))) continue;
+      centre += rig[p][w];
+      facing += normals[p][w];
+      ++count;
+    }
+  }
+  if (count == 0) return false;
+  centre /= count;
+  QualityPicture picture;
+  picture.title = request.title;
+  picture.clip = scene.clips[c].name;
+  picture.time = scene.clips[c].times[sample];
+  picture.subject = request.subject_name;
+  double radius = 0.0;
+  for (size_t p = 0; p < drawn.size(); ++p) {
+    for (size_t w = 0; w < rig[p].size(); ++w) {
+      if (!subject(p, static_cast<int>(w))) continue;
+      radius = std::max(radius, (rig[p][w] - centre).norm());
+      picture.max_out = std::max(picture.max_out, along[p][w]);
+      picture.max_in = std::max(picture.max_in, -along[p][w]);
+    }
+  }
+  const Camera camera = pictureCamera(landmarks, rig, subject, centre, facing, count, radius);
+  picture.scale = std::max({picture.max_out, picture.max_in, 1e-4 * landmarks.body.height});
+  std::vector<std::vector<Eigen::Vector3f>> colours(drawn.size());
+  for (size_t p = 0; p < drawn.size(); ++p)
+    // Square root: a move a tenth of the largest still shows a third of the colour.
+    for (double a : along[p]) colours[p].push_back(divergingColour(std::copysign(std::sqrt(std::abs(a) / picture.scale), a)));
+  std::vector<RenderSurface> plain_input, plain_rig, heat;
+  for (size_t p = 0; p < drawn.size(); ++p) {
+    plain_input.push_back({&input[p], &drawn[p].surface.whole.triangles, nullptr});
+    plain_rig.push_back({&rig[p], &drawn[p].surface.whole.triangles, nullptr});
+    heat.push_back({&rig[p], &drawn[p].surface.whole.triangles, &colours[p]});
+  }
+  const int size = scene.options.picture_size;
+  if (request.methods) {
+    const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
+    std::vector<std::vector<Eigen::Vector3d>> quaternion(drawn.size()), centred(drawn.size());
+    std::vector<RenderSurface> plain_quaternion, plain_centred;
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      const PicturePart& part = drawn[p];
+      quaternion[p] = weldedPositions(part.surface, skinDualQuaternion(part.mesh->positions, part.weights->input, rotations));
+      centred[p] = weldedPositions(
+          part.surface, skinCentreOfRotation(part.mesh->positions, part.weights->input, scene.centres[p], frame, rotations));
+      plain_quaternion.push_back({&quaternion[p], &part.surface.whole.triangles, nullptr});
+      plain_centred.push_back({&centred[p], &part.surface.whole.triangles, nullptr});
+    }
+    picture.panels = "plain skinning | dual quaternions | centres of rotation | rig";
+    picture.note = request.note;
+    picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_quaternion, camera, size, size),
+                                     renderSurfaces(plain_centred, camera, size, size), renderSurfaces(plain_rig, camera, size, size)});
+  } else {
+    picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
+                                     renderSurfaces(heat, camera, size, size)});
+  }
+  *drawn_picture = std::move(picture);
+  return true;
+}
+
+// Each clip: the region whose rig change departs most from the input's, at the rig's extreme.
+void addRegionPictureRequests(const DeformationQuality& quality, const std::vector<BodyRegion>& regions,
+                              const std::vector<PicturePart>& drawn, std::vector<PictureRequest>* requests) {
+  auto regionIndex = [&](const std::string& name) {
+    for (size_t r = 0; r < regions.size(); ++r)
+      if (regions[r].name == name) return static_cast<int>(r);
+    return -1;
+  };
+  // Welded vertices of each part on a region's triangles.
+  auto regionVertices = [&](int r) {
+    std::vector<std::vector<char>> on(drawn.size());
+    for (size_t p = 0; p < drawn.size(); ++p) {
+      on[p].assign(drawn[p].surface.weldedCount(), 0);
+      const MeshPart& mesh = *drawn[p].mesh;
+      for (int triangle : regions[r].triangles[p])
+        for (int corner : mesh.triangles[triangle]) on[p][drawn[p].surface.weld_of_vertex[corner]] = 1;
+    }
+    return on;
+  };
+  for (size_t c = 0; c < quality.clips.size(); ++c) {
+    const ClipQuality& figures = quality.clips[c];
+    int worst = -1;
+    double worst_gap = -1.0;
+    for (size_t r = 0; r < figures.regions.size(); ++r) {
+      const double gap = std::abs(figures.regions[r].rig.change - figures.regions[r].input.change);
+      if (gap > worst_gap) {
+        worst_gap = gap;
+        worst = static_cast<int>(r);
+      }
+    }
+    if (worst < 0) continue;
+    const int r = regionIndex(quality.regions[worst]);
+    if (r < 0) continue;
+    const double time = figures.regions[worst].rig.time;
+    requests->push_back({figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
+                         time, regionVertices(r), false, {}});
+  }
+}
+
 }  // namespace
 
 BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& landmarks, const RegionPreset& preset,
@@ -222,33 +480,9 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   const Skeleton& skeleton = character.skeleton;
   const int joint_count = skeleton.size();
   const bool with_rig = file.rig.present && file.rig.problems.empty() && !file.rig.rig.muscles.empty();
-
-  // The skinned muscle joints and their carriers.
   std::vector<FileMuscle> muscles;
-  if (with_rig) {
-    for (size_t m = 0; m < file.rig.skinned_joint.size(); ++m)
-      muscles.push_back({file.rig.names[m], file.rig.skinned_joint[m], file.rig.rig.muscles[m].carrier_joint, static_cast<int>(m)});
-  } else {
-    for (const FileMuscleNode& node : file.muscle_nodes) {
-      if (node.role != "skinned") continue;
-      const int carrier = node.carrier_joint.empty() ? -1 : skeleton.find(node.carrier_joint);
-      if (carrier < 0) {
-        out.skip_reason = "muscle node '" + node.name + "' does not name its carrier joint (a bake older than the carrier weights)";
-        return out;
-      }
-      muscles.push_back({node.muscle, skeleton.find(node.name), carrier, -1});
-    }
-  }
-  if (muscles.empty()) {
-    out.skip_reason = "the file has no skinned muscle joints";
-    return out;
-  }
-  for (const FileMuscle& muscle : muscles) {
-    if (muscle.joint < 0 || muscle.carrier < 0 || muscle.carrier >= joint_count) {
-      out.skip_reason = "muscle '" + muscle.name + "' has no skinned joint or carrier in the skeleton";
-      return out;
-    }
-  }
+  out.skip_reason = fileMuscles(skeleton, file, with_rig, &muscles);
+  if (!out.skip_reason.empty()) return out;
   std::vector<int> fold(joint_count);
   for (int j = 0; j < joint_count; ++j) fold[j] = j;
   for (const FileMuscle& muscle : muscles) fold[muscle.joint] = muscle.carrier;
@@ -259,31 +493,10 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   for (int j = 0; j < joint_count; ++j) rig_label[j] = j;
   for (int m = 0; m < measured_muscles; ++m) rig_label[muscles[m].joint] = joint_count + m;
 
-  // The character as the input skinning sees it: regions are cut on these weights.
   Character folded = character;
   std::vector<MeasuredPart> parts;
-  for (size_t p = 0; p < character.meshes.size(); ++p) {
-    const MeshPart& mesh = character.meshes[p];
-    // Every skinned part with positions, in order: BodyRegion::triangles is indexed the same way.
-    if (!mesh.skinned || mesh.positions.empty()) continue;
-    const InfluenceSet file_weights = influencesFromMesh(mesh);
-    if (!checkInfluences(file_weights, joint_count).empty()) {
-      out.skip_reason = "mesh '" + mesh.name + "' has invalid skin weights (WEIGHTS_* checks)";
-      return out;
-    }
-    MeasuredPart part;
-    part.mesh_part = static_cast<int>(p);
-    part.input = normalizedInfluences(foldInfluences(file_weights, fold));
-    part.rig = normalizedInfluences(foldInfluences(file_weights, rig_label));
-    folded.meshes[p].joints = part.input.joints;
-    folded.meshes[p].weights = part.input.weights;
-    folded.meshes[p].influences_per_vertex = part.input.slots_per_vertex;
-    parts.push_back(std::move(part));
-  }
-  if (parts.empty()) {
-    out.skip_reason = "no skinned mesh with valid weights and triangles";
-    return out;
-  }
+  out.skip_reason = measuredParts(character, fold, rig_label, &folded, &parts);
+  if (!out.skip_reason.empty()) return out;
   const std::vector<BodyRegion> regions = resolveBodyRegions(folded, landmarks, preset);
 
   MuscleSet muscle_set;
@@ -297,35 +510,8 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     part.kind = file.rig.kinds[muscles[m].rig_index];
     muscle_set.parts.push_back(std::move(part));
   }
-
-  // Skin matrices of the skeleton, then the muscles' skinned joints again at joint_count + m.
-  auto frameAt = [&](const Pose& pose) {
-    std::vector<Eigen::Affine3d> frame = bakedSkinMatrices(character, file, pose);
-    for (int m = 0; m < measured_muscles; ++m) frame.push_back(frame[muscles[m].joint]);
-    return frame;
-  };
-  std::vector<std::vector<SkinFrame>> frames(std::max<size_t>(character.clips.size(), 1));
-  std::vector<MeasuredClip> clips;
-  auto addClip = [&](const Clip* clip, size_t c) {
-    MeasuredClip measured;
-    measured.name = clip ? clip->name : "(rest pose)";
-    measured.times = clip ? sampleTimes(*clip, 0.0) : std::vector<double>{};
-    if (measured.times.empty()) measured.times.push_back(0.0);
-    for (double t : measured.times) {
-      const Pose pose = clip ? sampleClip(skeleton, *clip, t) : restPose(skeleton);
-      frames[c].push_back(frameAt(pose));
-      std::vector<double> ratio(measured_muscles, 1.0);
-      if (measured_muscles > 0) {
-        const RigEvaluation evaluation = evaluateRig(file.rig.rig, pose, false);
-        for (int m = 0; m < measured_muscles; ++m) ratio[m] = evaluation.drivers[muscles[m].rig_index].clamped_ratio;
-      }
-      measured.ratio.push_back(std::move(ratio));
-    }
-    measured.frames = &frames[c];
-    clips.push_back(std::move(measured));
-  };
-  for (size_t c = 0; c < character.clips.size(); ++c) addClip(&character.clips[c], c);
-  if (character.clips.empty()) addClip(nullptr, 0);
+  std::vector<std::vector<SkinFrame>> frames;
+  const std::vector<MeasuredClip> clips = measuredClips(character, file, muscles, measured_muscles, &frames);
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
   measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
@@ -343,172 +529,20 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
     PicturePart picture{&character.meshes[part.mesh_part], &part, buildVolumeSurface(character.meshes[part.mesh_part], tolerance), {}};
     drawn.push_back(std::move(picture));
   }
-  auto regionIndex = [&](const std::string& name) {
-    for (size_t r = 0; r < regions.size(); ++r)
-      if (regions[r].name == name) return static_cast<int>(r);
-    return -1;
-  };
-  auto sampleIndex = [&](size_t c, double time) {
-    const std::vector<double>& times = clips[c].times;
-    size_t best = 0;
-    for (size_t t = 1; t < times.size(); ++t)
-      if (std::abs(times[t] - time) < std::abs(times[best] - time)) best = t;
-    return best;
-  };
-  // Centres of rotation per drawn part, for the crease pictures only (filled before they are drawn).
   std::vector<RotationCentres> centres;
   std::vector<PictureRequest> requests;
-  // Draws one request into `picture`; false when it frames nothing.
-  auto draw = [&](const PictureRequest& request, QualityPicture* drawn_picture) {
-    const std::string& title = request.title;
-    const size_t c = request.clip;
-    const double time = request.time;
-    const std::string& subject_name = request.subject_name;
-    auto subject = [&request](size_t p, int w) { return request.on[p][static_cast<size_t>(w)] != 0; };
-    const SkinFrame& frame = frames[c][sampleIndex(c, time)];
-    std::vector<std::vector<Eigen::Vector3d>> input(drawn.size()), rig(drawn.size()), normals(drawn.size());
-    std::vector<std::vector<double>> along(drawn.size());
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero(), facing = Eigen::Vector3d::Zero();
-    int count = 0;
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      const PicturePart& part = drawn[p];
-      input[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->input, frame));
-      rig[p] = weldedPositions(part.surface, skinLinearBlend(part.mesh->positions, part.weights->rig, frame));
-      normals[p] = vertexNormals(part.surface.whole, input[p]);
-      along[p].resize(input[p].size());
-      for (size_t w = 0; w < input[p].size(); ++w) {
-        along[p][w] = (rig[p][w] - input[p][w]).dot(normals[p][w]);
-        if (!subject(p, static_cast<int>(w))) continue;
-        centre += rig[p][w];
-        facing += normals[p][w];
-        ++count;
-      }
-    }
-    if (count == 0) return false;
-    centre /= count;
-    QualityPicture picture;
-    picture.title = title;
-    picture.clip = clips[c].name;
-    picture.time = clips[c].times[sampleIndex(c, time)];
-    picture.subject = subject_name;
-    double radius = 0.0;
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      for (size_t w = 0; w < rig[p].size(); ++w) {
-        if (!subject(p, static_cast<int>(w))) continue;
-        radius = std::max(radius, (rig[p][w] - centre).norm());
-        picture.max_out = std::max(picture.max_out, along[p][w]);
-        picture.max_in = std::max(picture.max_in, -along[p][w]);
-      }
-    }
-    // Seen across the subject's long axis (a limb from the side, not end on). When the skin around it
-    // lies in a plane (a bent elbow, a raised arm against the torso), from that plane's normal, so the
-    // bend shows; otherwise from where the subject's skin faces (a muscle's patch), else from the front.
-    Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), around = Eigen::Matrix3d::Zero();
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      for (size_t w = 0; w < rig[p].size(); ++w) {
-        const Eigen::Vector3d d = rig[p][w] - centre;
-        if (subject(p, static_cast<int>(w))) spread += d * d.transpose();
-        if (d.norm() <= 1.5 * radius) around += d * d.transpose();
-      }
-    }
-    const Eigen::Vector3d axis = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvectors().col(2);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> plane(around);
-    auto across = [&](const Eigen::Vector3d& d) { return Eigen::Vector3d(d - d.dot(axis) * axis); };
-    Eigen::Vector3d view = Eigen::Vector3d::Zero();
-    if (plane.eigenvalues()[1] > 3.0 * plane.eigenvalues()[0]) {
-      view = plane.eigenvectors().col(0);
-      const Eigen::Vector3d toward = facing.norm() > 0.3 * count ? facing : landmarks.body.forward;
-      if (view.dot(toward) < 0.0) view = -view;
-    } else if (facing.norm() > 0.3 * count) {
-      view = across(facing);
-    }
-    if (view.norm() < 1e-6) view = across(landmarks.body.forward);
-    if (view.norm() < 1e-6) view = across(landmarks.body.lateral);
-    view.normalize();
-    Eigen::Vector3d up = landmarks.body.up - landmarks.body.up.dot(view) * view;
-    if (up.norm() < 1e-6) up = axis - axis.dot(view) * view;
-    Camera camera;
-    camera.centre = centre;
-    camera.forward = -view;
-    camera.up = up.normalized();
-    camera.half_height = std::max(1.3 * radius, 0.05 * landmarks.body.height);
-    picture.scale = std::max({picture.max_out, picture.max_in, 1e-4 * landmarks.body.height});
-    std::vector<std::vector<Eigen::Vector3f>> colours(drawn.size());
-    for (size_t p = 0; p < drawn.size(); ++p)
-      // Square root: a move a tenth of the largest still shows a third of the colour.
-      for (double a : along[p]) colours[p].push_back(divergingColour(std::copysign(std::sqrt(std::abs(a) / picture.scale), a)));
-    std::vector<RenderSurface> plain_input, plain_rig, heat;
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      plain_input.push_back({&input[p], &drawn[p].surface.whole.triangles, nullptr});
-      plain_rig.push_back({&rig[p], &drawn[p].surface.whole.triangles, nullptr});
-      heat.push_back({&rig[p], &drawn[p].surface.whole.triangles, &colours[p]});
-    }
-    const int size = options.picture_size;
-    if (request.methods) {
-      const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
-      std::vector<std::vector<Eigen::Vector3d>> quaternion(drawn.size()), centred(drawn.size());
-      std::vector<RenderSurface> plain_quaternion, plain_centred;
-      for (size_t p = 0; p < drawn.size(); ++p) {
-        const PicturePart& part = drawn[p];
-        quaternion[p] = weldedPositions(part.surface, skinDualQuaternion(part.mesh->positions, part.weights->input, rotations));
-        centred[p] = weldedPositions(
-            part.surface, skinCentreOfRotation(part.mesh->positions, part.weights->input, centres[p], frame, rotations));
-        plain_quaternion.push_back({&quaternion[p], &part.surface.whole.triangles, nullptr});
-        plain_centred.push_back({&centred[p], &part.surface.whole.triangles, nullptr});
-      }
-      picture.panels = "plain skinning | dual quaternions | centres of rotation | rig";
-      picture.note = request.note;
-      picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_quaternion, camera, size, size),
-                                       renderSurfaces(plain_centred, camera, size, size), renderSurfaces(plain_rig, camera, size, size)});
-    } else {
-      picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
-                                       renderSurfaces(heat, camera, size, size)});
-    }
-    *drawn_picture = std::move(picture);
-    return true;
-  };
-
-  // Welded vertices of each part on a region's triangles.
-  auto regionVertices = [&](int r) {
-    std::vector<std::vector<char>> on(drawn.size());
-    for (size_t p = 0; p < drawn.size(); ++p) {
-      on[p].assign(drawn[p].surface.weldedCount(), 0);
-      const MeshPart& mesh = *drawn[p].mesh;
-      for (int triangle : regions[r].triangles[p])
-        for (int corner : mesh.triangles[triangle]) on[p][drawn[p].surface.weld_of_vertex[corner]] = 1;
-    }
-    return on;
-  };
-  // Each clip: the region whose rig change departs most from the input's, at the rig's extreme.
-  const DeformationQuality& quality = out.quality;
-  for (size_t c = 0; c < quality.clips.size(); ++c) {
-    const ClipQuality& figures = quality.clips[c];
-    int worst = -1;
-    double worst_gap = -1.0;
-    for (size_t r = 0; r < figures.regions.size(); ++r) {
-      const double gap = std::abs(figures.regions[r].rig.change - figures.regions[r].input.change);
-      if (gap > worst_gap) {
-        worst_gap = gap;
-        worst = static_cast<int>(r);
-      }
-    }
-    if (worst < 0) continue;
-    const int r = regionIndex(quality.regions[worst]);
-    if (r < 0) continue;
-    const double time = figures.regions[worst].rig.time;
-    requests.push_back({figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
-                        time, regionVertices(r), false, {}});
-  }
-  addMusclePictureRequests(quality, clips, drawn, joint_count, measured_muscles, &requests);
-  addCreasePictureRequests(quality, creases, parts, drawn, &requests);
+  addRegionPictureRequests(out.quality, regions, drawn, &requests);
+  addMusclePictureRequests(out.quality, clips, drawn, joint_count, measured_muscles, &requests);
+  addCreasePictureRequests(out.quality, creases, parts, drawn, &requests);
   if (std::any_of(requests.begin(), requests.end(), [](const PictureRequest& request) { return request.methods; })) {
     for (const PicturePart& part : drawn) centres.push_back(optimizedRotationCentres(*part.mesh, part.weights->input, options.threads));
   }
   // Each picture on its own (the requests only read the frames, the surfaces and the figures), in the
   // requests' order.
+  const PictureScene scene{landmarks, options, drawn, frames, clips, centres};
   std::vector<QualityPicture> pictures(requests.size());
   std::vector<char> framed(requests.size(), 0);
-  parallelForEach(options.threads, requests.size(), [&](size_t i) { framed[i] = draw(requests[i], &pictures[i]); });
+  parallelForEach(options.threads, requests.size(), [&](size_t i) { framed[i] = drawPicture(scene, requests[i], &pictures[i]); });
   for (size_t i = 0; i < requests.size(); ++i)
     if (framed[i]) out.pictures.push_back(std::move(pictures[i]));
   return out;

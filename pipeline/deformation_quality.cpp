@@ -227,6 +227,497 @@ Eigen::Vector3d skinCentre(const Character& character, const std::vector<Measure
   return low.allFinite() && high.allFinite() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
 }
 
+namespace {
+
+// Welds each part once and cuts each region the figures measure out of it and closes it (quality only;
+// otherwise the weld alone). Regions too flat to enclose a meaningful volume are left out of the
+// figures (and listed); `kept` gets the measured regions' indices.
+std::vector<PreparedPart> prepareSurfaces(const Character& character, const std::vector<BodyRegion>& regions,
+                                          const std::vector<MeasuredPart>& parts, bool quality, double weld_tolerance, int threads,
+                                          std::vector<size_t>* kept, DeformationQuality* figures) {
+  std::vector<PreparedPart> prepared(parts.size());
+  if (!quality) {
+    for (size_t p = 0; p < parts.size(); ++p) prepared[p].surface = buildVolumeSurface(character.meshes[parts[p].mesh_part], weld_tolerance);
+    return prepared;
+  }
+  std::vector<int> mesh_parts;
+  for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
+  std::vector<std::vector<std::vector<int>>> region_triangles;
+  for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
+  MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, weld_tolerance, threads);
+  for (size_t r = 0; r < regions.size(); ++r) {
+    if (measured.region_measured[r]) {
+      kept->push_back(r);
+      figures->regions.push_back(regions[r].name);
+    } else {
+      figures->unmeasured_regions.push_back(regions[r].name);
+    }
+  }
+  for (size_t p = 0; p < parts.size(); ++p) {
+    PreparedPart& part = prepared[p];
+    part.surface = std::move(measured.surfaces[p]);
+    std::vector<int> whole_of_part(character.meshes[parts[p].mesh_part].triangles.size(), -1);
+    for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) whole_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
+    // Which closed region each triangle is in; a triangle two regions claim leaves both to be summed
+    // on their own.
+    part.region_of_triangle.assign(part.surface.whole.triangles.size(), -1);
+    std::vector<char> shared(kept->size(), 0);
+    for (size_t k = 0; k < kept->size(); ++k) {
+      const size_t r = (*kept)[k];
+      MeasuredRegion region;
+      region.patch = std::move(measured.regions[p][r]);
+      region.with_whole = true;
+      if (p < regions[r].triangles.size()) {
+        for (int t : regions[r].triangles[p]) {
+          const int i = whole_of_part[t];
+          if (i < 0) continue;
+          int& owner = part.region_of_triangle[static_cast<size_t>(i)];
+          if (owner >= 0 && owner != static_cast<int>(k)) shared[k] = shared[static_cast<size_t>(owner)] = 1;
+          owner = static_cast<int>(k);
+        }
+      }
+      part.regions.push_back(std::move(region));
+    }
+    for (size_t k = 0; k < kept->size(); ++k) {
+      if (!shared[k]) continue;
+      part.regions[k].with_whole = false;
+    }
+    for (int& owner : part.region_of_triangle)
+      if (owner >= 0 && !part.regions[static_cast<size_t>(owner)].with_whole) owner = -1;
+  }
+  return prepared;
+}
+
+// The part's vertices for the pass, in one skinning batch: the welded ones (volumes), and for the error
+// every other vertex whose position or weights differ from its welded vertex's (an exact copy has the
+// same error); each lane's welded vertex, each vertex's lane, and the error's rounding bound's inputs.
+void prepareBatch(const std::vector<std::vector<ErrorWeights>>& errors, size_t p, bool quality, const Eigen::Vector3d& centre,
+                  int joint_count, DualQuaternionPivots* pivots, int threads, PreparedPart* part) {
+  const int approximations = part->approximations;
+  const std::vector<Eigen::Vector3d>& positions = part->mesh->positions;
+  const VolumeSurface& surface = part->surface;
+  std::vector<int> vertices;
+  std::vector<char> dual_quaternion;
+  std::vector<int> skinned_as(positions.size(), -1);  // the vertex whose lane holds this one's figures
+  for (size_t v = 0; v < positions.size(); ++v) {
+    const size_t first = static_cast<size_t>(surface.vertex_of_weld[surface.weld_of_vertex[v]]);
+    bool copy = first != v;
+    if (copy && approximations == 0) continue;
+    if (copy) {
+      copy = positions[v] == positions[first];
+      for (int a = 0; a < approximations && copy; ++a)
+        copy = sameSlots(*errors[a][p].reference, v, first) && sameSlots(*errors[a][p].approximation, v, first);
+    }
+    skinned_as[v] = static_cast<int>(copy ? first : v);
+    if (copy) continue;
+    vertices.push_back(static_cast<int>(v));
+    dual_quaternion.push_back(quality && first == v);
+  }
+  std::array<SetWeights, kSkinSets> sets;
+  if (quality) {
+    sets[kInputSet].plus = &part->weights->input;
+    sets[kRigSet].plus = &part->weights->rig;
+  }
+  for (int a = 0; a < approximations; ++a) {
+    sets[kFirstErrorSet + a].plus = errors[a][p].reference;
+    sets[kFirstErrorSet + a].minus = errors[a][p].approximation;
+  }
+  part->batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, pivots, threads);
+  const SkinningBatch& batch = part->batch;
+  std::vector<std::uint32_t> lane_of_skinned(positions.size(), 0);
+  part->welded_of_lane.reserve(kSkinLanes * batch.groups());  // lives through the pass: no slack
+  for (size_t g = 0; g < batch.groups(); ++g) {
+    for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+      const int v = batch.vertex[kSkinLanes * g + lane];
+      const bool welded = quality && v >= 0 && surface.vertex_of_weld[surface.weld_of_vertex[v]] == v;
+      part->welded_of_lane.push_back(welded ? surface.weld_of_vertex[v] : -1);
+      if (v < 0) continue;
+      lane_of_skinned[static_cast<size_t>(v)] = static_cast<std::uint32_t>(kSkinLanes * g + lane);
+      const double size = (positions[static_cast<size_t>(v)] - centre).norm() + 1.0;
+      for (int a = 0; a < approximations; ++a) {
+        double sum = 0.0;
+        int count = 0;
+        for (std::uint32_t slot = batch.first_slot[g]; slot < batch.first_slot[g + 1]; ++slot) {
+          const float weight = batch.weights[kSkinSets * slot + kFirstErrorSet + a].v[lane];
+          sum += std::abs(weight);
+          count += weight != 0.0f;
+        }
+        part->error_scale[a] = std::max(part->error_scale[a], size * sum);
+        part->widest[a] = std::max(part->widest[a], count);
+      }
+    }
+  }
+  if (approximations > 0) {
+    part->lane_of_vertex.resize(positions.size());
+    for (size_t v = 0; v < positions.size(); ++v) part->lane_of_vertex[v] = lane_of_skinned[static_cast<size_t>(skinned_as[v])];
+  }
+}
+
+// The whole surface's triangles in runs of one region (PreparedPart::ordered_corners): stable by
+// region (-1, none, first), a counting sort, the order std::stable_sort gives (it took 9 ms of the 100k
+// sample's set-up on one core).
+void orderTrianglesByRegion(size_t region_count, PreparedPart* part) {
+  const VolumeSurface& surface = part->surface;
+  std::vector<size_t> first_of_region(region_count + 2, 0);
+  for (int region : part->region_of_triangle) ++first_of_region[static_cast<size_t>(region + 2)];
+  for (size_t k = 1; k < first_of_region.size(); ++k) first_of_region[k] += first_of_region[k - 1];
+  std::vector<size_t> order(surface.whole.triangles.size());
+  for (size_t i = 0; i < order.size(); ++i) order[first_of_region[static_cast<size_t>(part->region_of_triangle[i] + 1)]++] = i;
+  part->ordered_corners.reserve(order.size());
+  for (size_t i : order) {
+    const int region = part->region_of_triangle[i];
+    if (part->runs.empty() || part->runs.back().region != region)
+      part->runs.push_back({part->ordered_corners.size(), part->ordered_corners.size(), region});
+    const std::array<int, 3>& t = surface.whole.triangles[i];
+    part->ordered_corners.push_back({3u * static_cast<std::uint32_t>(t[0]), 3u * static_cast<std::uint32_t>(t[1]),
+                                     3u * static_cast<std::uint32_t>(t[2])});
+    part->runs.back().end = part->ordered_corners.size();
+  }
+}
+
+// Bind volumes, in double from the bind positions themselves.
+FrameVolumes bindVolumes(const std::vector<PreparedPart>& prepared, size_t region_count, bool quality, DeformationQuality* figures) {
+  FrameVolumes bind;
+  bind.regions.assign(region_count, {0, 0, 0});
+  if (!quality) return bind;
+  for (const PreparedPart& part : prepared) {
+    const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, part.mesh->positions);
+    const double body = enclosedVolume(part.surface.whole, welded);
+    for (int k = 0; k < 3; ++k) bind.body[k] += body;
+    for (size_t r = 0; r < region_count; ++r) {
+      const double region = enclosedVolume(part.regions[r].patch, welded);
+      for (int k = 0; k < 3; ++k) bind.regions[r][k] += region;
+    }
+  }
+  figures->body_volume = bind.body[0];
+  for (size_t r = 0; r < region_count; ++r) figures->region_volumes.push_back(bind.regions[r][0]);
+  return bind;
+}
+
+double volumeChange(double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; }
+
+// Every clip's frames in one list, and each muscle's most compressed and most stretched sample over
+// every clip, whose skin moves the pass measures on those frames.
+struct FramePlan {
+  struct Sample {
+    int clip = -1, frame = -1;
+    double ratio = 1.0;
+  };
+  std::vector<std::pair<size_t, size_t>> clip_frame;  // (clip, frame) in clip order
+  std::vector<size_t> first_frame;                    // per clip
+  std::vector<Sample> most_compressed, most_stretched;  // per muscle
+  std::vector<std::vector<int>> moves_at;             // muscles measured at each frame
+};
+
+FramePlan planFrames(const std::vector<MeasuredClip>& clips, int muscle_count, bool quality) {
+  FramePlan plan;
+  for (size_t c = 0; c < clips.size(); ++c) {
+    plan.first_frame.push_back(plan.clip_frame.size());
+    for (size_t t = 0; t < clips[c].times.size(); ++t) plan.clip_frame.emplace_back(c, t);
+  }
+  plan.most_compressed.resize(muscle_count);
+  plan.most_stretched.resize(muscle_count);
+  plan.moves_at.resize(plan.clip_frame.size());
+  if (!quality) return plan;
+  for (size_t c = 0; c < clips.size(); ++c) {
+    for (size_t t = 0; t < clips[c].times.size(); ++t) {
+      for (int m = 0; m < muscle_count; ++m) {
+        const double ratio = clips[c].ratio[t][m];
+        if (ratio < plan.most_compressed[m].ratio) plan.most_compressed[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+        if (ratio > plan.most_stretched[m].ratio) plan.most_stretched[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
+      }
+    }
+  }
+  for (int m = 0; m < muscle_count; ++m) {
+    for (const FramePlan::Sample* sample : {&plan.most_compressed[m], &plan.most_stretched[m]}) {
+      if (sample->clip < 0) continue;
+      std::vector<int>& at = plan.moves_at[plan.first_frame[sample->clip] + static_cast<size_t>(sample->frame)];
+      if (std::find(at.begin(), at.end(), m) == at.end()) at.push_back(m);
+    }
+  }
+  return plan;
+}
+
+// The pass over the frames: each frame skins every part's entries, keeps the welded positions (about
+// the centre), sums the volumes, the errors and the skin moves asked for there. Every frame writes only
+// its own figures.
+class DeformationPass {
+ public:
+  DeformationPass(const std::vector<MeasuredClip>& clips, const std::vector<PreparedPart>& prepared, const FramePlan& plan,
+                  const Eigen::Vector3d& centre, const DualQuaternionPivots& pivots, bool quality, int joint_count,
+                  size_t region_count)
+      : clips_(clips), prepared_(prepared), plan_(plan), centre_(centre), pivots_(pivots), quality_(quality),
+        joint_count_(joint_count), region_count_(region_count) {}
+
+  std::vector<FrameVolumes> volumes;                                      // per frame
+  std::vector<std::vector<MoveSums>> moves;                               // per frame
+  std::vector<std::vector<std::vector<ScreenedError>>>* screened = nullptr;  // [a][f][p]
+
+  void measureFrame(size_t f, Scratch& scratch);
+
+ private:
+  void skinPart(const PreparedPart& part, const FloatSkinFrame& frame, Scratch& scratch);
+  void measureErrors(const PreparedPart& part, size_t f, size_t p, const FloatSkinFrame& frame, const Scratch& scratch);
+  void sumVolumes(const PreparedPart& part, Scratch& scratch, FrameVolumes* frame_volumes);
+  void measureSkinMoves(const PreparedPart& part, const SkinFrame& skin, Scratch& scratch, std::vector<MoveSums>* frame_moves);
+
+  const std::vector<MeasuredClip>& clips_;
+  const std::vector<PreparedPart>& prepared_;
+  const FramePlan& plan_;
+  const Eigen::Vector3d& centre_;
+  const DualQuaternionPivots& pivots_;
+  const bool quality_;
+  const int joint_count_;
+  const size_t region_count_;
+};
+
+// Skins the part at the frame: the welded vertices' three skinnings into scratch.planar (quality), each
+// lane's squared error per approximation into scratch.squared.
+void DeformationPass::skinPart(const PreparedPart& part, const FloatSkinFrame& frame, Scratch& scratch) {
+  const SkinningBatch& batch = part.batch;
+  const bool quality = quality_;
+  if (quality) scratch.planar.resize(3 * static_cast<size_t>(part.surface.weldedCount()));
+  Float4* planar = scratch.planar.data();
+  // The errors: each lane's squared distance, then summed and searched in vertex order (so that the
+  // figures of one approximation do not depend on what else is skinned with it).
+  for (int a = 0; a < part.approximations; ++a) scratch.squared[a].resize(kSkinLanes * batch.groups());
+  auto visit = [&](size_t g, const SkinnedGroup& group) {
+    if (quality) {
+      // Per vertex the stored lanes are (input, dual quaternion, rig, -): a transpose of the
+      // group's lanes.
+      for (int c = 0; c < 3; ++c) {
+        const __m128 bind = c == 0 ? group.x : c == 1 ? group.y : group.z;
+        __m128 input = _mm_add_ps(bind, group.offset[kInputSet][c]);
+        __m128 dual_quaternion = group.dual_quaternion[c];
+        __m128 rig = _mm_add_ps(bind, group.offset[kRigSet][c]);
+        __m128 unused = _mm_setzero_ps();
+        _MM_TRANSPOSE4_PS(input, dual_quaternion, rig, unused);
+        const __m128 lanes[kSkinLanes] = {input, dual_quaternion, rig, unused};
+        for (size_t lane = 0; lane < kSkinLanes; ++lane) {
+          const int w = part.welded_of_lane[kSkinLanes * g + lane];
+          if (w >= 0) _mm_store_ps(planar[3 * static_cast<size_t>(w) + static_cast<size_t>(c)].v, lanes[lane]);
+        }
+      }
+    }
+    for (int a = 0; a < part.approximations; ++a) {
+      const __m128* offset = group.offset[kFirstErrorSet + a];
+      const __m128 squared = _mm_add_ps(_mm_add_ps(_mm_mul_ps(offset[0], offset[0]), _mm_mul_ps(offset[1], offset[1])),
+                                        _mm_mul_ps(offset[2], offset[2]));
+      _mm_storeu_ps(&scratch.squared[a][kSkinLanes * g], squared);
+    }
+  };
+  const size_t groups = batch.groups();
+  switch (part.approximations * 2 + (quality ? 1 : 0)) {
+    case 0: break;
+    case 1: skinSkinningBatch<0x3>(batch, frame, 0, groups, visit); break;
+    case 2: skinSkinningBatch<0x4>(batch, frame, 0, groups, visit); break;
+    case 3: skinSkinningBatch<0x7>(batch, frame, 0, groups, visit); break;
+    case 4: skinSkinningBatch<0xC>(batch, frame, 0, groups, visit); break;
+    default: skinSkinningBatch<0xF>(batch, frame, 0, groups, visit); break;
+  }
+}
+
+void DeformationPass::measureErrors(const PreparedPart& part, size_t f, size_t p, const FloatSkinFrame& frame, const Scratch& scratch) {
+  for (int a = 0; a < part.approximations; ++a) {
+    const float* squared = scratch.squared[a].data();
+    double sum_squared = 0.0;
+    float largest = 0.0f;
+    int largest_vertex = -1;
+    const int vertex_count = static_cast<int>(part.lane_of_vertex.size());
+    for (int v = 0; v < vertex_count; ++v) {
+      const float s = squared[part.lane_of_vertex[static_cast<size_t>(v)]];
+      sum_squared += static_cast<double>(s);
+      if (s > largest) {
+        largest = s;
+        largest_vertex = v;
+      }
+    }
+    ScreenedError& screened_error = (*screened)[static_cast<size_t>(a)][f][p];
+    DeformationError& error = screened_error.error;
+    error.vertex_count = vertex_count;
+    error.max_displacement = std::sqrt(static_cast<double>(largest));
+    error.max_vertex = largest_vertex;
+    if (vertex_count > 0) error.rms_displacement = std::sqrt(sum_squared / vertex_count);
+    // Rounding of the single-precision offsets (skinning_batch.h): each d_k within 8 units of
+    // roundoff of reach (|p - c| + 1), the blend within one more per slot, the length within 4.
+    const double unit = std::ldexp(1.0, -24);
+    screened_error.bound = 2.0 * ((part.widest[a] + 10) * unit * frame.reach * part.error_scale[a] +
+                                  4.0 * unit * error.max_displacement);
+  }
+}
+
+// Volumes: the whole surface about its first vertex, each region about its own (so a region's terms are
+// the size of the region, not of the body), as skin_volume.cpp sums them; a triangle's area vector
+// serves the body and its region.
+void DeformationPass::sumVolumes(const PreparedPart& part, Scratch& scratch, FrameVolumes* frame_volumes) {
+  const size_t region_count = region_count_;
+  const Float4* planar = scratch.planar.data();
+  const ClosedPatch& whole = part.surface.whole;
+  const PlanarPosition zero{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
+  const PlanarPosition whole_origin = whole.triangles.empty() ? zero : loadPlanar(planar, whole.triangles[0][0]);
+  scratch.region_origin.resize(region_count);
+  scratch.region_sum.assign(region_count, LaneSum());
+  for (size_t r = 0; r < region_count; ++r) {
+    const ClosedPatch& patch = part.regions[r].patch;
+    scratch.region_origin[r] = patch.triangles.empty() ? zero : loadPlanar(planar, patch.triangles[0][0]);
+  }
+  // Runs of one region: the body's and the region's sums in registers, eight terms at a time.
+  LaneSum body;
+  for (const PreparedPart::Run& run : part.runs) {
+    LaneSum* region_sum = run.region >= 0 ? &scratch.region_sum[static_cast<size_t>(run.region)] : nullptr;
+    const PlanarPosition& region_origin = run.region >= 0 ? scratch.region_origin[static_cast<size_t>(run.region)] : zero;
+    for (size_t block = run.begin; block < run.end; block += LaneSum::kBlock) {
+      const size_t block_end = std::min(run.end, block + LaneSum::kBlock);
+      __m128 body_terms = _mm_setzero_ps(), region_terms = _mm_setzero_ps();
+      for (size_t i = block; i < block_end; ++i) {
+        const std::array<std::uint32_t, 3>& t = part.ordered_corners[i];
+        const PlanarPosition a = loadPlanarAt(planar + t[0]);
+        const PlanarPosition area = areaVector(a, loadPlanarAt(planar + t[1]), loadPlanarAt(planar + t[2]));
+        body_terms = _mm_add_ps(body_terms, dot(minus(a, whole_origin), area));
+        if (region_sum != nullptr) region_terms = _mm_add_ps(region_terms, dot(minus(a, region_origin), area));
+      }
+      body.addBlock(body_terms);
+      if (region_sum != nullptr) region_sum->addBlock(region_terms);
+    }
+  }
+  addCaps(whole, planar, whole_origin, &body);
+  const std::array<double, 4> body_sum = body.total();
+  for (int k = 0; k < kSkinnings; ++k) frame_volumes->body[k] += body_sum[k] / 6.0;
+  for (size_t r = 0; r < region_count; ++r) {
+    const MeasuredRegion& region = part.regions[r];
+    if (region.patch.triangles.empty()) continue;
+    LaneSum& sum = scratch.region_sum[r];
+    const PlanarPosition& own = scratch.region_origin[r];
+    if (!region.with_whole) {
+      for (const auto& t : region.patch.triangles)
+        sum.add(tetrahedron(minus(loadPlanar(planar, t[0]), own), minus(loadPlanar(planar, t[1]), own),
+                            minus(loadPlanar(planar, t[2]), own)));
+    }
+    addCaps(region.patch, planar, own, &sum);
+    const std::array<double, 4> region_sum = sum.total();
+    for (int k = 0; k < kSkinnings; ++k) frame_volumes->regions[r][k] += region_sum[k] / 6.0;
+  }
+}
+
+// The skin's move along the input skinning's normal where a muscle is measured at this frame, in double
+// as skin_volume.cpp and skinning.cpp compute it: only the muscles' vertices and the triangles around
+// them, each normal summed over its triangles in the same order.
+void DeformationPass::measureSkinMoves(const PreparedPart& part, const SkinFrame& skin, Scratch& scratch,
+                                       std::vector<MoveSums>* frame_moves) {
+  const ClosedPatch& whole = part.surface.whole;
+  const int welded_count = part.surface.weldedCount();
+  scratch.moved.assign(static_cast<size_t>(welded_count), 0);
+  for (const MoveSums& move : *frame_moves)
+    for (const MuscleSkinVertex& vertex : part.muscle_skin[static_cast<size_t>(move.muscle)]) scratch.moved[vertex.welded] = 1;
+  scratch.moved_index.assign(static_cast<size_t>(welded_count), -1);
+  scratch.moved_vertices.clear();
+  auto need = [&](int w) {
+    if (scratch.moved_index[w] >= 0) return;
+    scratch.moved_index[w] = static_cast<int>(scratch.moved_vertices.size());
+    scratch.moved_vertices.push_back(part.surface.vertex_of_weld[w]);
+  };
+  for (const auto& t : whole.triangles) {
+    if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
+    for (int k = 0; k < 3; ++k) need(t[k]);
+  }
+  for (int w = 0; w < welded_count; ++w)
+    if (scratch.moved[w]) need(w);
+  skinLinearBlend(part.mesh->positions, part.weights->input, skin, scratch.moved_vertices, &scratch.input);
+  skinLinearBlend(part.mesh->positions, part.weights->rig, skin, scratch.moved_vertices, &scratch.rig);
+  scratch.normals.assign(scratch.moved_vertices.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : whole.triangles) {
+    if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
+    const Eigen::Vector3d& a = scratch.input[scratch.moved_index[t[0]]];
+    const Eigen::Vector3d area = (scratch.input[scratch.moved_index[t[1]]] - a).cross(scratch.input[scratch.moved_index[t[2]]] - a);
+    for (int k = 0; k < 3; ++k) scratch.normals[scratch.moved_index[t[k]]] += area;
+  }
+  for (MoveSums& move : *frame_moves) {
+    for (const MuscleSkinVertex& vertex : part.muscle_skin[static_cast<size_t>(move.muscle)]) {
+      const size_t i = static_cast<size_t>(scratch.moved_index[vertex.welded]);
+      Eigen::Vector3d normal = scratch.normals[i];
+      const double length = normal.norm();
+      if (length > 0) normal /= length;
+      const double along = (scratch.rig[i] - scratch.input[i]).dot(normal);
+      move.weighted += vertex.weight * along;
+      move.total += vertex.weight;
+      move.max_out = std::max(move.max_out, along);
+      move.max_in = std::max(move.max_in, -along);
+      ++move.vertices;
+    }
+  }
+}
+
+void DeformationPass::measureFrame(size_t f, Scratch& scratch) {
+  const SkinFrame& skin = (*clips_[plan_.clip_frame[f].first].frames)[plan_.clip_frame[f].second];
+  prepareFloatSkinFrame(skin, centre_, quality_ ? joint_count_ : 0, pivots_, &scratch.frame);
+  const FloatSkinFrame& frame = scratch.frame;
+  const std::vector<int>& moved_muscles = plan_.moves_at[f];
+  std::vector<MoveSums>& frame_moves = moves[f];
+  for (int m : moved_muscles) frame_moves.push_back(MoveSums{m});
+  for (size_t p = 0; p < prepared_.size(); ++p) {
+    const PreparedPart& part = prepared_[p];
+    skinPart(part, frame, scratch);
+    measureErrors(part, f, p, frame, scratch);
+    if (!quality_) continue;
+    sumVolumes(part, scratch, &volumes[f]);
+    if (!moved_muscles.empty()) measureSkinMoves(part, skin, scratch, &frame_moves);
+  }
+}
+
+// Each clip's extremes in frame order.
+void clipExtremes(const std::vector<MeasuredClip>& clips, const FramePlan& plan, const std::vector<FrameVolumes>& all_volumes,
+                  const FrameVolumes& bind, size_t region_count, DeformationQuality* figures) {
+  for (size_t c = 0; c < clips.size(); ++c) {
+    const MeasuredClip& clip = clips[c];
+    ClipQuality clip_figures;
+    clip_figures.clip = clip.name;
+    clip_figures.regions.resize(region_count);
+    double worst = -1.0;
+    const FrameVolumes* clip_volumes = all_volumes.data() + plan.first_frame[c];
+    for (size_t t = 0; t < clip.times.size(); ++t) {
+      const FrameVolumes& volumes = clip_volumes[t];
+      const double time = clip.times[t];
+      keepExtreme(volumeChange(volumes.body[0], bind.body[0]), time, &clip_figures.body.input);
+      keepExtreme(volumeChange(volumes.body[1], bind.body[1]), time, &clip_figures.body.dual_quaternion);
+      const double rig_change = volumeChange(volumes.body[2], bind.body[2]);
+      keepExtreme(rig_change, time, &clip_figures.body.rig);
+      if (std::abs(rig_change) > worst) {
+        worst = std::abs(rig_change);
+        clip_figures.worst_frame = static_cast<int>(t);
+      }
+      for (size_t r = 0; r < region_count; ++r) {
+        keepExtreme(volumeChange(volumes.regions[r][0], bind.regions[r][0]), time, &clip_figures.regions[r].input);
+        keepExtreme(volumeChange(volumes.regions[r][1], bind.regions[r][1]), time, &clip_figures.regions[r].dual_quaternion);
+        keepExtreme(volumeChange(volumes.regions[r][2], bind.regions[r][2]), time, &clip_figures.regions[r].rig);
+      }
+    }
+    figures->clips.push_back(std::move(clip_figures));
+  }
+}
+
+// A muscle's skin move at its sample, when `wanted` (compressed or stretched there).
+MuscleSkinMove skinMoveAt(const std::vector<MeasuredClip>& clips, const FramePlan& plan,
+                          const std::vector<std::vector<MoveSums>>& all_moves, int m, const FramePlan::Sample& sample, bool wanted) {
+  MuscleSkinMove move;
+  if (!wanted || sample.clip < 0) return move;
+  const size_t f = plan.first_frame[sample.clip] + static_cast<size_t>(sample.frame);
+  for (const MoveSums& sums : all_moves[f]) {
+    if (sums.muscle != m) continue;
+    if (sums.vertices == 0) return MuscleSkinMove{};
+    move.measured = true;
+    move.clip = clips[sample.clip].name;
+    move.time = clips[sample.clip].times[sample.frame];
+    move.ratio = sample.ratio;
+    move.mean = sums.weighted / sums.total;
+    move.max_out = sums.max_out;
+    move.max_in = sums.max_in;
+    move.vertices = sums.vertices;
+  }
+  return move;
+}
+
+}  // namespace
+
 DeformationMeasures measureDeformation(const Character& character, const std::vector<BodyRegion>& regions,
                                        const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,
                                        const std::vector<MeasuredClip>& clips, bool quality,
@@ -239,64 +730,10 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
   DeformationMeasures measures;
   DeformationQuality& figures = measures.quality;
   const double weld_tolerance = 1e-6 * std::max(muscles.body_height, 1e-3);
-
-  // Weld each part once; cut each region out of it and close it. Regions too flat to enclose a
-  // meaningful volume are left out of the figures (and listed).
-  std::vector<PreparedPart> prepared(parts.size());
   std::vector<size_t> kept;
-  if (quality) {
-    std::vector<int> mesh_parts;
-    for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
-    std::vector<std::vector<std::vector<int>>> region_triangles;
-    for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
-    MeasuredSurfaces measured = measuredSurfaces(character, mesh_parts, region_triangles, weld_tolerance, threads);
-    for (size_t r = 0; r < regions.size(); ++r) {
-      if (measured.region_measured[r]) {
-        kept.push_back(r);
-        figures.regions.push_back(regions[r].name);
-      } else {
-        figures.unmeasured_regions.push_back(regions[r].name);
-      }
-    }
-    for (size_t p = 0; p < parts.size(); ++p) {
-      PreparedPart& part = prepared[p];
-      part.surface = std::move(measured.surfaces[p]);
-      std::vector<int> whole_of_part(character.meshes[parts[p].mesh_part].triangles.size(), -1);
-      for (size_t t = 0; t < part.surface.part_triangle.size(); ++t) whole_of_part[part.surface.part_triangle[t]] = static_cast<int>(t);
-      // Which closed region each triangle is in; a triangle two regions claim leaves both to be summed
-      // on their own.
-      part.region_of_triangle.assign(part.surface.whole.triangles.size(), -1);
-      std::vector<char> shared(kept.size(), 0);
-      for (size_t k = 0; k < kept.size(); ++k) {
-        const size_t r = kept[k];
-        MeasuredRegion region;
-        region.patch = std::move(measured.regions[p][r]);
-        region.with_whole = true;
-        if (p < regions[r].triangles.size()) {
-          for (int t : regions[r].triangles[p]) {
-            const int i = whole_of_part[t];
-            if (i < 0) continue;
-            int& owner = part.region_of_triangle[static_cast<size_t>(i)];
-            if (owner >= 0 && owner != static_cast<int>(k)) shared[k] = shared[static_cast<size_t>(owner)] = 1;
-            owner = static_cast<int>(k);
-          }
-        }
-        part.regions.push_back(std::move(region));
-      }
-      for (size_t k = 0; k < kept.size(); ++k) {
-        if (!shared[k]) continue;
-        part.regions[k].with_whole = false;
-      }
-      for (int& owner : part.region_of_triangle)
-        if (owner >= 0 && !part.regions[static_cast<size_t>(owner)].with_whole) owner = -1;
-    }
-  } else {
-    for (size_t p = 0; p < parts.size(); ++p) prepared[p].surface = buildVolumeSurface(character.meshes[parts[p].mesh_part], weld_tolerance);
-  }
+  std::vector<PreparedPart> prepared = prepareSurfaces(character, regions, parts, quality, weld_tolerance, threads, &kept, &figures);
   const size_t region_count = kept.size();
 
-  // Each part's vertices for the pass: the welded ones (volumes), and for the error every other vertex
-  // whose position or weights differ from its welded vertex's (an exact copy has the same error).
   const Eigen::Vector3d centre = skinCentre(character, parts);
   DualQuaternionPivots pivots;
   size_t widest_surface = 0;
@@ -305,384 +742,43 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
     part.mesh = &character.meshes[parts[p].mesh_part];
     part.weights = &parts[p];
     part.approximations = approximations;
-    const std::vector<Eigen::Vector3d>& positions = part.mesh->positions;
-    const VolumeSurface& surface = part.surface;
-    std::vector<int> vertices;
-    std::vector<char> dual_quaternion;
-    std::vector<int> skinned_as(positions.size(), -1);  // the vertex whose lane holds this one's figures
-    for (size_t v = 0; v < positions.size(); ++v) {
-      const size_t first = static_cast<size_t>(surface.vertex_of_weld[surface.weld_of_vertex[v]]);
-      bool copy = first != v;
-      if (copy && approximations == 0) continue;
-      if (copy) {
-        copy = positions[v] == positions[first];
-        for (int a = 0; a < approximations && copy; ++a)
-          copy = sameSlots(*errors[a][p].reference, v, first) && sameSlots(*errors[a][p].approximation, v, first);
-      }
-      skinned_as[v] = static_cast<int>(copy ? first : v);
-      if (copy) continue;
-      vertices.push_back(static_cast<int>(v));
-      dual_quaternion.push_back(quality && first == v);
-    }
-    std::array<SetWeights, kSkinSets> sets;
-    if (quality) {
-      sets[kInputSet].plus = &part.weights->input;
-      sets[kRigSet].plus = &part.weights->rig;
-    }
-    for (int a = 0; a < approximations; ++a) {
-      sets[kFirstErrorSet + a].plus = errors[a][p].reference;
-      sets[kFirstErrorSet + a].minus = errors[a][p].approximation;
-    }
-    part.batch = buildSkinningBatch(positions, vertices, centre, sets, dual_quaternion, joint_count, &pivots, threads);
-    const SkinningBatch& batch = part.batch;
-    std::vector<std::uint32_t> lane_of_skinned(positions.size(), 0);
-    part.welded_of_lane.reserve(kSkinLanes * batch.groups());  // lives through the pass: no slack
-    for (size_t g = 0; g < batch.groups(); ++g) {
-      for (size_t lane = 0; lane < kSkinLanes; ++lane) {
-        const int v = batch.vertex[kSkinLanes * g + lane];
-        const bool welded = quality && v >= 0 && surface.vertex_of_weld[surface.weld_of_vertex[v]] == v;
-        part.welded_of_lane.push_back(welded ? surface.weld_of_vertex[v] : -1);
-        if (v < 0) continue;
-        lane_of_skinned[static_cast<size_t>(v)] = static_cast<std::uint32_t>(kSkinLanes * g + lane);
-        const double size = (positions[static_cast<size_t>(v)] - centre).norm() + 1.0;
-        for (int a = 0; a < approximations; ++a) {
-          double sum = 0.0;
-          int count = 0;
-          for (std::uint32_t slot = batch.first_slot[g]; slot < batch.first_slot[g + 1]; ++slot) {
-            const float weight = batch.weights[kSkinSets * slot + kFirstErrorSet + a].v[lane];
-            sum += std::abs(weight);
-            count += weight != 0.0f;
-          }
-          part.error_scale[a] = std::max(part.error_scale[a], size * sum);
-          part.widest[a] = std::max(part.widest[a], count);
-        }
-      }
-    }
-    if (approximations > 0) {
-      part.lane_of_vertex.resize(positions.size());
-      for (size_t v = 0; v < positions.size(); ++v) part.lane_of_vertex[v] = lane_of_skinned[static_cast<size_t>(skinned_as[v])];
-    }
-    if (quality) {
-      // Stable by region (-1, none, first): a counting sort, the order std::stable_sort gives (it took
-      // 9 ms of the 100k sample's set-up on one core).
-      std::vector<size_t> first_of_region(kept.size() + 2, 0);
-      for (int region : part.region_of_triangle) ++first_of_region[static_cast<size_t>(region + 2)];
-      for (size_t k = 1; k < first_of_region.size(); ++k) first_of_region[k] += first_of_region[k - 1];
-      std::vector<size_t> order(surface.whole.triangles.size());
-      for (size_t i = 0; i < order.size(); ++i) order[first_of_region[static_cast<size_t>(part.region_of_triangle[i] + 1)]++] = i;
-      part.ordered_corners.reserve(order.size());
-      for (size_t i : order) {
-        const int region = part.region_of_triangle[i];
-        if (part.runs.empty() || part.runs.back().region != region)
-          part.runs.push_back({part.ordered_corners.size(), part.ordered_corners.size(), region});
-        const std::array<int, 3>& t = surface.whole.triangles[i];
-        part.ordered_corners.push_back({3u * static_cast<std::uint32_t>(t[0]), 3u * static_cast<std::uint32_t>(t[1]),
-                                        3u * static_cast<std::uint32_t>(t[2])});
-        part.runs.back().end = part.ordered_corners.size();
-      }
-    }
-    if (quality) part.muscle_skin = muscleSkin(part.weights->rig, surface.vertex_of_weld, joint_count, muscle_count);
-    widest_surface = std::max(widest_surface, static_cast<size_t>(surface.weldedCount()));
+    prepareBatch(errors, p, quality, centre, joint_count, &pivots, threads, &part);
+    if (quality) orderTrianglesByRegion(kept.size(), &part);
+    if (quality) part.muscle_skin = muscleSkin(part.weights->rig, part.surface.vertex_of_weld, joint_count, muscle_count);
+    widest_surface = std::max(widest_surface, static_cast<size_t>(part.surface.weldedCount()));
   }
+  const FrameVolumes bind = bindVolumes(prepared, region_count, quality, &figures);
+  const FramePlan plan = planFrames(clips, muscle_count, quality);
+  const size_t frame_count = plan.clip_frame.size();
 
-  // Bind volumes, in double from the bind positions themselves.
-  FrameVolumes bind;
-  bind.regions.assign(region_count, {0, 0, 0});
-  if (quality) {
-    for (const PreparedPart& part : prepared) {
-      const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, part.mesh->positions);
-      const double body = enclosedVolume(part.surface.whole, welded);
-      for (int k = 0; k < 3; ++k) bind.body[k] += body;
-      for (size_t r = 0; r < region_count; ++r) {
-        const double region = enclosedVolume(part.regions[r].patch, welded);
-        for (int k = 0; k < 3; ++k) bind.regions[r][k] += region;
-      }
-    }
-    figures.body_volume = bind.body[0];
-    for (size_t r = 0; r < region_count; ++r) figures.region_volumes.push_back(bind.regions[r][0]);
-  }
-  auto change = [](double volume, double reference) { return reference != 0.0 ? volume / reference - 1.0 : 0.0; };
-
-  // Every clip's frames in one list; each muscle's most compressed and most stretched sample over
-  // every clip, whose skin moves the pass measures on those frames.
-  std::vector<std::pair<size_t, size_t>> clip_frame;  // (clip, frame) in clip order
-  std::vector<size_t> first_frame;
-  for (size_t c = 0; c < clips.size(); ++c) {
-    first_frame.push_back(clip_frame.size());
-    for (size_t t = 0; t < clips[c].times.size(); ++t) clip_frame.emplace_back(c, t);
-  }
-  struct Sample {
-    int clip = -1, frame = -1;
-    double ratio = 1.0;
-  };
-  std::vector<Sample> most_compressed(muscle_count), most_stretched(muscle_count);
-  std::vector<std::vector<int>> moves_at(clip_frame.size());  // muscles measured at each frame
-  if (quality) {
-    for (size_t c = 0; c < clips.size(); ++c) {
-      for (size_t t = 0; t < clips[c].times.size(); ++t) {
-        for (int m = 0; m < muscle_count; ++m) {
-          const double ratio = clips[c].ratio[t][m];
-          if (ratio < most_compressed[m].ratio) most_compressed[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
-          if (ratio > most_stretched[m].ratio) most_stretched[m] = {static_cast<int>(c), static_cast<int>(t), ratio};
-        }
-      }
-    }
-    for (int m = 0; m < muscle_count; ++m) {
-      for (const Sample* sample : {&most_compressed[m], &most_stretched[m]}) {
-        if (sample->clip < 0) continue;
-        std::vector<int>& at = moves_at[first_frame[sample->clip] + static_cast<size_t>(sample->frame)];
-        if (std::find(at.begin(), at.end(), m) == at.end()) at.push_back(m);
-      }
-    }
-  }
-
-  std::vector<FrameVolumes> all_volumes(clip_frame.size());
-  for (FrameVolumes& volumes : all_volumes) volumes.regions.assign(region_count, {0, 0, 0});
-  std::vector<std::vector<MoveSums>> all_moves(clip_frame.size());
+  DeformationPass pass(clips, prepared, plan, centre, pivots, quality, joint_count, region_count);
+  pass.volumes.resize(frame_count);
+  for (FrameVolumes& volumes : pass.volumes) volumes.regions.assign(region_count, {0, 0, 0});
+  pass.moves.resize(frame_count);
   measures.screened.assign(static_cast<size_t>(approximations),
-                           std::vector<std::vector<ScreenedError>>(clip_frame.size(), std::vector<ScreenedError>(parts.size())));
-
-  // One frame: skin every part's entries, keep the welded positions (about the centre), sum the
-  // volumes, the errors and the skin moves asked for there.
-  auto measureFrame = [&](size_t f, Scratch& scratch) {
-    const SkinFrame& skin = (*clips[clip_frame[f].first].frames)[clip_frame[f].second];
-    prepareFloatSkinFrame(skin, centre, quality ? joint_count : 0, pivots, &scratch.frame);
-    const FloatSkinFrame& frame = scratch.frame;
-    FrameVolumes& volumes = all_volumes[f];
-    const std::vector<int>& moved_muscles = moves_at[f];
-    std::vector<MoveSums>& moves = all_moves[f];
-    for (int m : moved_muscles) moves.push_back(MoveSums{m});
-    for (size_t p = 0; p < prepared.size(); ++p) {
-      const PreparedPart& part = prepared[p];
-      const SkinningBatch& batch = part.batch;
-      if (quality) scratch.planar.resize(3 * static_cast<size_t>(part.surface.weldedCount()));
-      Float4* planar = scratch.planar.data();
-      // The errors: each lane's squared distance, then summed and searched in vertex order (so that the
-      // figures of one approximation do not depend on what else is skinned with it).
-      for (int a = 0; a < part.approximations; ++a) scratch.squared[a].resize(kSkinLanes * batch.groups());
-      auto visit = [&](size_t g, const SkinnedGroup& group) {
-        if (quality) {
-          // Per vertex the stored lanes are (input, dual quaternion, rig, -): a transpose of the
-          // group's lanes.
-          for (int c = 0; c < 3; ++c) {
-            const __m128 bind = c == 0 ? group.x : c == 1 ? group.y : group.z;
-            __m128 input = _mm_add_ps(bind, group.offset[kInputSet][c]);
-            __m128 dual_quaternion = group.dual_quaternion[c];
-            __m128 rig = _mm_add_ps(bind, group.offset[kRigSet][c]);
-            __m128 unused = _mm_setzero_ps();
-            _MM_TRANSPOSE4_PS(input, dual_quaternion, rig, unused);
-            const __m128 lanes[kSkinLanes] = {input, dual_quaternion, rig, unused};
-            for (size_t lane = 0; lane < kSkinLanes; ++lane) {
-              const int w = part.welded_of_lane[kSkinLanes * g + lane];
-              if (w >= 0) _mm_store_ps(planar[3 * static_cast<size_t>(w) + static_cast<size_t>(c)].v, lanes[lane]);
-            }
-          }
-        }
-        for (int a = 0; a < part.approximations; ++a) {
-          const __m128* offset = group.offset[kFirstErrorSet + a];
-          const __m128 squared = _mm_add_ps(_mm_add_ps(_mm_mul_ps(offset[0], offset[0]), _mm_mul_ps(offset[1], offset[1])),
-                                            _mm_mul_ps(offset[2], offset[2]));
-          _mm_storeu_ps(&scratch.squared[a][kSkinLanes * g], squared);
-        }
-      };
-      const size_t groups = batch.groups();
-      switch (part.approximations * 2 + (quality ? 1 : 0)) {
-        case 0: break;
-        case 1: skinSkinningBatch<0x3>(batch, frame, 0, groups, visit); break;
-        case 2: skinSkinningBatch<0x4>(batch, frame, 0, groups, visit); break;
-        case 3: skinSkinningBatch<0x7>(batch, frame, 0, groups, visit); break;
-        case 4: skinSkinningBatch<0xC>(batch, frame, 0, groups, visit); break;
-        default: skinSkinningBatch<0xF>(batch, frame, 0, groups, visit); break;
-      }
-      for (int a = 0; a < part.approximations; ++a) {
-        const float* squared = scratch.squared[a].data();
-        double sum_squared = 0.0;
-        float largest = 0.0f;
-        int largest_vertex = -1;
-        const int vertex_count = static_cast<int>(part.lane_of_vertex.size());
-        for (int v = 0; v < vertex_count; ++v) {
-          const float s = squared[part.lane_of_vertex[static_cast<size_t>(v)]];
-          sum_squared += static_cast<double>(s);
-          if (s > largest) {
-            largest = s;
-            largest_vertex = v;
-          }
-        }
-        ScreenedError& screened = measures.screened[static_cast<size_t>(a)][f][p];
-        DeformationError& error = screened.error;
-        error.vertex_count = vertex_count;
-        error.max_displacement = std::sqrt(static_cast<double>(largest));
-        error.max_vertex = largest_vertex;
-        if (vertex_count > 0) error.rms_displacement = std::sqrt(sum_squared / vertex_count);
-        // Rounding of the single-precision offsets (skinning_batch.h): each d_k within 8 units of
-        // roundoff of reach (|p - c| + 1), the blend within one more per slot, the length within 4.
-        const double unit = std::ldexp(1.0, -24);
-        screened.bound = 2.0 * ((part.widest[a] + 10) * unit * frame.reach * part.error_scale[a] +
-                                4.0 * unit * error.max_displacement);
-      }
-      if (!quality) continue;
-
-      // Volumes: the whole surface about its first vertex, each region about its own (so a region's
-      // terms are the size of the region, not of the body), as skin_volume.cpp sums them; a triangle's
-      // area vector serves the body and its region.
-      const ClosedPatch& whole = part.surface.whole;
-      const PlanarPosition zero{_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps()};
-      const PlanarPosition whole_origin = whole.triangles.empty() ? zero : loadPlanar(planar, whole.triangles[0][0]);
-      scratch.region_origin.resize(region_count);
-      scratch.region_sum.assign(region_count, LaneSum());
-      for (size_t r = 0; r < region_count; ++r) {
-        const ClosedPatch& patch = part.regions[r].patch;
-        scratch.region_origin[r] = patch.triangles.empty() ? zero : loadPlanar(planar, patch.triangles[0][0]);
-      }
-      // Runs of one region: the body's and the region's sums in registers, eight terms at a time.
-      LaneSum body;
-      for (const PreparedPart::Run& run : part.runs) {
-        LaneSum* region_sum = run.region >= 0 ? &scratch.region_sum[static_cast<size_t>(run.region)] : nullptr;
-        const PlanarPosition& region_origin = run.region >= 0 ? scratch.region_origin[static_cast<size_t>(run.region)] : zero;
-        for (size_t block = run.begin; block < run.end; block += LaneSum::kBlock) {
-          const size_t block_end = std::min(run.end, block + LaneSum::kBlock);
-          __m128 body_terms = _mm_setzero_ps(), region_terms = _mm_setzero_ps();
-          for (size_t i = block; i < block_end; ++i) {
-            const std::array<std::uint32_t, 3>& t = part.ordered_corners[i];
-            const PlanarPosition a = loadPlanarAt(planar + t[0]);
-            const PlanarPosition area = areaVector(a, loadPlanarAt(planar + t[1]), loadPlanarAt(planar + t[2]));
-            body_terms = _mm_add_ps(body_terms, dot(minus(a, whole_origin), area));
-            if (region_sum != nullptr) region_terms = _mm_add_ps(region_terms, dot(minus(a, region_origin), area));
-          }
-          body.addBlock(body_terms);
-          if (region_sum != nullptr) region_sum->addBlock(region_terms);
-        }
-      }
-      addCaps(whole, planar, whole_origin, &body);
-      const std::array<double, 4> body_sum = body.total();
-      for (int k = 0; k < kSkinnings; ++k) volumes.body[k] += body_sum[k] / 6.0;
-      for (size_t r = 0; r < region_count; ++r) {
-        const MeasuredRegion& region = part.regions[r];
-        if (region.patch.triangles.empty()) continue;
-        LaneSum& sum = scratch.region_sum[r];
-        const PlanarPosition& own = scratch.region_origin[r];
-        if (!region.with_whole) {
-          for (const auto& t : region.patch.triangles)
-            sum.add(tetrahedron(minus(loadPlanar(planar, t[0]), own), minus(loadPlanar(planar, t[1]), own),
-                                minus(loadPlanar(planar, t[2]), own)));
-        }
-        addCaps(region.patch, planar, own, &sum);
-        const std::array<double, 4> region_sum = sum.total();
-        for (int k = 0; k < kSkinnings; ++k) volumes.regions[r][k] += region_sum[k] / 6.0;
-      }
-
-      // The skin's move along the input skinning's normal where a muscle is measured at this frame, in
-      // double as skin_volume.cpp and skinning.cpp compute it: only the muscles' vertices and the
-      // triangles around them, each normal summed over its triangles in the same order.
-      if (moved_muscles.empty()) continue;
-      const int welded_count = part.surface.weldedCount();
-      scratch.moved.assign(static_cast<size_t>(welded_count), 0);
-      for (const MoveSums& move : moves)
-        for (const MuscleSkinVertex& skin : part.muscle_skin[static_cast<size_t>(move.muscle)]) scratch.moved[skin.welded] = 1;
-      scratch.moved_index.assign(static_cast<size_t>(welded_count), -1);
-      scratch.moved_vertices.clear();
-      auto need = [&](int w) {
-        if (scratch.moved_index[w] >= 0) return;
-        scratch.moved_index[w] = static_cast<int>(scratch.moved_vertices.size());
-        scratch.moved_vertices.push_back(part.surface.vertex_of_weld[w]);
-      };
-      for (const auto& t : whole.triangles) {
-        if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
-        for (int k = 0; k < 3; ++k) need(t[k]);
-      }
-      for (int w = 0; w < welded_count; ++w)
-        if (scratch.moved[w]) need(w);
-      skinLinearBlend(part.mesh->positions, part.weights->input, skin, scratch.moved_vertices, &scratch.input);
-      skinLinearBlend(part.mesh->positions, part.weights->rig, skin, scratch.moved_vertices, &scratch.rig);
-      scratch.normals.assign(scratch.moved_vertices.size(), Eigen::Vector3d::Zero());
-      for (const auto& t : whole.triangles) {
-        if (!scratch.moved[t[0]] && !scratch.moved[t[1]] && !scratch.moved[t[2]]) continue;
-        const Eigen::Vector3d& a = scratch.input[scratch.moved_index[t[0]]];
-        const Eigen::Vector3d area = (scratch.input[scratch.moved_index[t[1]]] - a).cross(scratch.input[scratch.moved_index[t[2]]] - a);
-        for (int k = 0; k < 3; ++k) scratch.normals[scratch.moved_index[t[k]]] += area;
-      }
-      for (MoveSums& move : moves) {
-        for (const MuscleSkinVertex& skin : part.muscle_skin[static_cast<size_t>(move.muscle)]) {
-          const size_t i = static_cast<size_t>(scratch.moved_index[skin.welded]);
-          Eigen::Vector3d normal = scratch.normals[i];
-          const double length = normal.norm();
-          if (length > 0) normal /= length;
-          const double along = (scratch.rig[i] - scratch.input[i]).dot(normal);
-          move.weighted += skin.weight * along;
-          move.total += skin.weight;
-          move.max_out = std::max(move.max_out, along);
-          move.max_in = std::max(move.max_in, -along);
-          ++move.vertices;
-        }
-      }
-    }
-  };
-
-  // Frames in chunks of a few, each worker reusing its scratch; every frame writes only its own figures.
+                           std::vector<std::vector<ScreenedError>>(frame_count, std::vector<ScreenedError>(parts.size())));
+  pass.screened = &measures.screened;
+  // Frames in chunks of a few, each worker reusing its scratch.
   constexpr size_t kFramesPerChunk = 2;
-  std::vector<Scratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, clip_frame.size(), kFramesPerChunk)));
+  std::vector<Scratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, frame_count, kFramesPerChunk)));
   for (Scratch& s : scratch) s.planar.reserve(3 * widest_surface);
-  parallelForWorkers(threads, clip_frame.size(), kFramesPerChunk, [&](size_t worker, size_t, size_t begin, size_t end) {
-    for (size_t f = begin; f < end; ++f) measureFrame(f, scratch[worker]);
+  parallelForWorkers(threads, frame_count, kFramesPerChunk, [&](size_t worker, size_t, size_t begin, size_t end) {
+    for (size_t f = begin; f < end; ++f) pass.measureFrame(f, scratch[worker]);
   });
   if (!quality) return measures;
 
-  // Each clip's extremes in frame order.
-  for (size_t c = 0; c < clips.size(); ++c) {
-    const MeasuredClip& clip = clips[c];
-    ClipQuality clip_figures;
-    clip_figures.clip = clip.name;
-    clip_figures.regions.resize(region_count);
-    double worst = -1.0;
-    const FrameVolumes* clip_volumes = all_volumes.data() + first_frame[c];
-    for (size_t t = 0; t < clip.times.size(); ++t) {
-      const FrameVolumes& volumes = clip_volumes[t];
-      const double time = clip.times[t];
-      keepExtreme(change(volumes.body[0], bind.body[0]), time, &clip_figures.body.input);
-      keepExtreme(change(volumes.body[1], bind.body[1]), time, &clip_figures.body.dual_quaternion);
-      const double rig_change = change(volumes.body[2], bind.body[2]);
-      keepExtreme(rig_change, time, &clip_figures.body.rig);
-      if (std::abs(rig_change) > worst) {
-        worst = std::abs(rig_change);
-        clip_figures.worst_frame = static_cast<int>(t);
-      }
-      for (size_t r = 0; r < region_count; ++r) {
-        keepExtreme(change(volumes.regions[r][0], bind.regions[r][0]), time, &clip_figures.regions[r].input);
-        keepExtreme(change(volumes.regions[r][1], bind.regions[r][1]), time, &clip_figures.regions[r].dual_quaternion);
-        keepExtreme(change(volumes.regions[r][2], bind.regions[r][2]), time, &clip_figures.regions[r].rig);
-      }
-    }
-    figures.clips.push_back(std::move(clip_figures));
-  }
-
-  auto skinMove = [&](int m, const Sample& sample, bool wanted) {
-    MuscleSkinMove move;
-    if (!wanted || sample.clip < 0) return move;
-    const size_t f = first_frame[sample.clip] + static_cast<size_t>(sample.frame);
-    for (const MoveSums& sums : all_moves[f]) {
-      if (sums.muscle != m) continue;
-      if (sums.vertices == 0) return MuscleSkinMove{};
-      move.measured = true;
-      move.clip = clips[sample.clip].name;
-      move.time = clips[sample.clip].times[sample.frame];
-      move.ratio = sample.ratio;
-      move.mean = sums.weighted / sums.total;
-      move.max_out = sums.max_out;
-      move.max_in = sums.max_in;
-      move.vertices = sums.vertices;
-    }
-    return move;
-  };
+  clipExtremes(clips, plan, pass.volumes, bind, region_count, &figures);
   for (int m = 0; m < muscle_count; ++m) {
     MuscleQuality muscle;
     muscle.muscle = muscles.parts[m].fullName();
     muscle.kind = muscles.parts[m].kind;
-    muscle.compressed = skinMove(m, most_compressed[m], most_compressed[m].ratio < 1.0);
-    muscle.stretched = skinMove(m, most_stretched[m], most_stretched[m].ratio > 1.0);
+    muscle.compressed = skinMoveAt(clips, plan, pass.moves, m, plan.most_compressed[m], plan.most_compressed[m].ratio < 1.0);
+    muscle.stretched = skinMoveAt(clips, plan, pass.moves, m, plan.most_stretched[m], plan.most_stretched[m].ratio > 1.0);
     figures.muscles.push_back(std::move(muscle));
   }
   return measures;
 }
+
 
 DeformationQuality measureDeformationQuality(const Character& character, const std::vector<BodyRegion>& regions,
                                              const std::vector<MeasuredPart>& parts, const MuscleSet& muscles,

@@ -7,6 +7,7 @@
 #include "anatomy/formula_eval.h"
 #include "anatomy/surface_distance.h"
 #include "anatomy_fixture.h"
+#include "core/error.h"
 
 using namespace rigbake;
 
