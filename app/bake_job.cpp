@@ -125,7 +125,7 @@ BakeOutputs bakeJob(const BakeRequest& request, const Presets& presets) {
   out.stats_json = bakeStatsJson(stats);
   std::vector<PackedInfluences> packed;
   for (const BakedPart& part : out.bake.parts) packed.push_back(part.packed);
-  if (!packed.empty()) out.packed = encodePackedFile(packed);
+  if (request.packed) out.packed = encodePackedFile(packed);
   out.muscles_json = muscleJson(out.bake.muscles, character.skeleton, preset.name);
   out.model = std::move(file.bytes);
   out.timings.write = clock.lap();

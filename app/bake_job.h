@@ -33,6 +33,9 @@ struct BakeRequest {
   std::string jiggle;             // jiggle preset (a file or a name); empty: no jiggle
   std::string hits;               // hit file kicking the jiggles; needs `jiggle`
   bool springs_only = false;      // VRM: the jiggles as spring bones only, not baked into the clips
+  // Also make the packed influences file. Only when asked: a character whose mesh parts pack with
+  // different index sizes has no single file (encodePackedFile() throws INTERNAL), yet bakes.
+  bool packed = false;
   // influences, gltf_weights, fps, threads, response, fit, motion, helper_joints, measure_quality;
   // its regions, creases, jiggles, hits and progress are filled in from the fields above.
   BakeOptions options;
@@ -50,7 +53,7 @@ struct BakeJobTimings {
 struct BakeOutputs {
   // The bytes of every output.
   std::string model;         // GLB, VRM or glTF JSON, as BakeRequest::output names it
-  std::string packed;        // the packed influences file (formats/packed_file.h); empty when nothing is skinned
+  std::string packed;        // the packed influences file (formats/packed_file.h) when BakeRequest::packed
   std::string stats_json;    // the figures (formats/bake_stats_json.h)
   std::string muscles_json;  // the muscles as baked (carriers chosen, response fitted)
   // What was baked, for a caller to report on.

@@ -127,6 +127,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   request.jiggle = character.jiggle;
   request.hits = character.hits;
   request.springs_only = character.vrm_springs_only;
+  request.packed = character.packed;
   BakeOptions& options = request.options;
   options.influences = character.influences;
   options.gltf_weights = character.gltf_weights;

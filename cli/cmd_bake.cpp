@@ -11,7 +11,6 @@
 #include "cli/progress.h"
 #include "formats/atomic_file.h"
 #include "formats/bake_stats_json.h"
-#include "formats/packed_file.h"
 #include "pipeline/bake.h"
 #include "pipeline/leg_coverage.h"
 
@@ -170,6 +169,7 @@ app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const Progress
   request.jiggle = options.jiggle;
   request.hits = options.hits;
   request.springs_only = options.springs_only;
+  request.packed = !options.packed_output.empty();
   BakeOptions& bake = request.options;
   bake.influences = options.influences;
   parseGltfWeights(options.gltf_weights, &bake.gltf_weights);  // CLI11 has checked the name
@@ -198,8 +198,7 @@ int run(const BakeCommandOptions& options) {
   // All the outputs or none: a --stats that cannot be written must not leave a new -o behind.
   OutputBatch outputs;
   outputs.add(options.output, out.model);
-  // Nothing skinned, no packed file: encodePackedFile() says why, as it always did.
-  if (!options.packed_output.empty()) outputs.add(options.packed_output, out.packed.empty() ? encodePackedFile({}) : out.packed);
+  if (!options.packed_output.empty()) outputs.add(options.packed_output, out.packed);
   if (!options.stats_output.empty()) outputs.add(options.stats_output, out.stats_json);
   if (!options.muscles_output.empty()) outputs.add(options.muscles_output, out.muscles_json);
   outputs.commit();

@@ -68,6 +68,7 @@ TEST_CASE("app: bakeJob names a bad option by its field, never by a command-line
 TEST_CASE("app: bakeJob makes every output's bytes and says what it baked") {
   app::BakeRequest request = quickSampleBake();
   request.jiggle = "biceps";
+  request.packed = true;
   const app::BakeOutputs out = app::bakeJob(request, appPresets());
   // A GLB, whose stats name the files without their folders and count what was baked.
   REQUIRE(out.model.size() > 12);
