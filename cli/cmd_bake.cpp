@@ -152,9 +152,9 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
 }
 
 // Where each field of app::BakeRequest and BakeOptions comes from on the command line.
+// (The fields app::bakeJob and bakeCharacter name in an InvalidOption.)
 const std::vector<FlagName> kBakeFlags = {
-    {"influences", "--influences"}, {"fps", "--fps"},     {"hits", "--hits"},
-    {"springs_only", "--vrm-springs-only"}, {"jiggle", "--jiggle"}, {"fit.max_poses", "--fit-poses"}};
+    {"influences", "--influences"}, {"fps", "--fps"}, {"hits", "--hits"}, {"springs_only", "--vrm-springs-only"}};
 
 app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const ProgressReport& progress) {
   app::BakeRequest request;
