@@ -76,8 +76,7 @@ BakeOutputs bakeJob(const BakeRequest& request, const Presets& presets) {
   Stopwatch clock;
   reportProgress(request.progress, "loading the character");
   const MusclePreset preset = readMusclePreset(presetFile(presets.directory, "muscles", request.preset));
-  out.character = loadCharacter(request.character, presets);
-  out.notes = out.character.loaded.notes;
+  out.character = loadCharacter(request.character, presets, request.notes);
   Character& character = out.character.loaded.character;
   const LandmarkSet& landmarks = out.character.landmarks;
   out.timings.load = clock.lap();

@@ -40,6 +40,7 @@ struct BakeRequest {
   // its regions, creases, jiggles, hits and progress are filled in from the fields above.
   BakeOptions options;
   ProgressReport progress;  // told of each stage as it starts; may be empty
+  NoteReport notes;         // told of the character's notes as it is loaded; may be empty
 };
 
 // Wall-clock seconds of the job's stages, for bench/ (never in an output).
@@ -57,7 +58,7 @@ struct BakeOutputs {
   std::string stats_json;    // the figures (formats/bake_stats_json.h)
   std::string muscles_json;  // the muscles as baked (carriers chosen, response fitted)
   // What was baked, for a caller to report on.
-  ResolvedCharacter character;  // as baked: ROM clips appended (measure-only)
+  ResolvedCharacter character;  // as baked: ROM clips appended (measure-only); its notes too
   BakeResult bake;
   long long animation_bytes = 0;        // the written model's animation buffers
   long long input_animation_bytes = 0;  // the same in the input
@@ -67,7 +68,6 @@ struct BakeOutputs {
   int hits = 0;
   LegCoverage legs;
   BakeJobTimings timings;
-  std::vector<std::string> notes;  // what loading left out (an FBX, a VRM conversion), one sentence each
 };
 
 // Throws the stages' Errors (a missing file, an unresolved landmark, ...) and InvalidOption naming a

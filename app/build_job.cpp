@@ -82,7 +82,7 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
   request.map = character.map;
   request.rom = character.rom;
   if (!character.regions.empty()) request.regions = character.regions;
-  const Report report = validateJob(request, presets).report;
+  const Report report = validateJob(request, presets);
   writeReports(report, {out.report_json, out.report_junit, out.report_html}, threads);
   int failed = 0;
   for (const CheckResult& check : report.checks)

@@ -52,11 +52,13 @@ LandmarkSet resolveCharacterLandmarks(const Character& character, const Presets&
   return resolveWith(character, presets, &forced);
 }
 
-ResolvedCharacter loadCharacter(const CharacterSource& source, const Presets& presets) {
+ResolvedCharacter loadCharacter(const CharacterSource& source, const Presets& presets, const NoteReport& notes) {
   NamingMap forced;
   if (!source.map.empty()) forced = namingMapOf(presets, source.map);
   ResolvedCharacter resolved;
   resolved.loaded = rigbake::loadCharacter(source.path, source.load);
+  if (notes)
+    for (const std::string& note : resolved.loaded.notes) notes(note);
   resolved.landmarks = resolveWith(resolved.loaded.character, presets, source.map.empty() ? nullptr : &forced);
   return resolved;
 }

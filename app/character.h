@@ -4,6 +4,7 @@
 // flag: a bad option is an InvalidOption naming its field (core/error.h).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,10 @@ struct CharacterSource {
   std::string map;
 };
 
+// Told of each note as loading makes it (what an FBX or a VRM conversion left out, one sentence), so a
+// command line can print it before whatever comes next, a later failure included.
+using NoteReport = std::function<void(const std::string& note)>;
+
 struct ResolvedCharacter {
   LoadedCharacter loaded;  // its notes (what an FBX or VRM conversion left out) are the caller's to print
   LandmarkSet landmarks;
@@ -47,8 +52,8 @@ NamingMap namingMapOf(const Presets& presets, const std::string& map);
 // The character's landmarks; throws LANDMARK_UNRESOLVED (and what resolveLandmarks throws).
 LandmarkSet resolveCharacterLandmarks(const Character& character, const Presets& presets, const std::string& map = "");
 
-// Reads the file, then resolves its landmarks. The map is checked first, so a misspelt map name fails
-// before a large file is parsed.
-ResolvedCharacter loadCharacter(const CharacterSource& source, const Presets& presets);
+// Reads the file, tells `notes` of its notes, then resolves its landmarks. The map is checked first, so a
+// misspelt map name fails before a large file is parsed.
+ResolvedCharacter loadCharacter(const CharacterSource& source, const Presets& presets, const NoteReport& notes = {});
 
 }  // namespace rigbake::app

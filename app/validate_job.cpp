@@ -76,12 +76,14 @@ ExternalValidation runKhronosValidator(const std::string& path) {
 
 }  // namespace
 
-ValidationOutputs validateJob(const ValidationRequest& request, const Presets& presets) {
+Report validateJob(const ValidationRequest& request, const Presets& presets) {
   reportProgress(request.progress, "loading the character");
   // A misspelt map fails before the file is read, as loadCharacter() does.
   NamingMap forced;
   if (!request.map.empty()) forced = namingMapOf(presets, request.map);
   LoadedCharacter loaded = rigbake::loadCharacter(request.baked);
+  if (request.notes)
+    for (const std::string& note : loaded.notes) request.notes(note);
   LandmarkSet landmarks;
   bool landmarks_resolved = true;
   std::string landmark_problem;
@@ -135,10 +137,7 @@ ValidationOutputs validateJob(const ValidationRequest& request, const Presets& p
     inputs.khronos.skip_reason = "not requested (pass --khronos)";
   }
   reportProgress(request.progress, "checking");
-  ValidationOutputs out;
-  out.report = validateBakedCharacter(inputs, request.config);
-  out.notes = loaded.notes;
-  return out;
+  return validateBakedCharacter(inputs, request.config);
 }
 
 ReportPaths reportPathsIn(const std::string& directory) {

@@ -23,17 +23,13 @@ struct ValidationRequest {
   std::string regions = "body";  // region preset for the deformation-quality figures (name or path)
   bool pictures = true;       // render the deformation pictures for report.html
   ProgressReport progress;    // told of each stage as it starts; may be empty
+  NoteReport notes;           // told of the file's notes as it is loaded (app/character.h); may be empty
   int threads = 0;            // for the per-frame measures; 0: one per core (the reports are the same at any count)
-};
-
-struct ValidationOutputs {
-  Report report;
-  std::vector<std::string> notes;  // what loading left out (an FBX), one sentence each, for the caller to print
 };
 
 // The file is parsed once, also when a landmark does not resolve (that becomes the landmark check's
 // finding).
-ValidationOutputs validateJob(const ValidationRequest& request, const Presets& presets);
+Report validateJob(const ValidationRequest& request, const Presets& presets);
 
 // Renders all three reports first, then commits them as one OutputBatch, so a failure leaves none.
 struct ReportPaths {

@@ -180,6 +180,7 @@ app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const Progress
   parseMuscleMotion(options.muscle_motion, &bake.motion);
   bake.helper_joints = options.helper_joints;
   request.progress = progress;
+  request.notes = printNotesOf(options.character);
   return request;
 }
 
@@ -204,7 +205,6 @@ int run(const BakeCommandOptions& options) {
   outputs.commit();
 
   progress.clear();
-  printLoadNotes(options.character, out.notes);
   if (options.json) std::cout << out.stats_json;
   printFigures(options, out);
   return 0;

@@ -49,12 +49,11 @@ int run(const ValidateCommandOptions& options) {
   request.pictures = options.pictures;
   request.progress = progress.report();
   request.threads = options.threads;
-  const app::ValidationOutputs validated = app::validateJob(request, app::loadPresets(presetsDirectory(options.presets)));
-  const Report& report = validated.report;
+  request.notes = printNotesOf(options.baked);
+  const Report report = app::validateJob(request, app::loadPresets(presetsDirectory(options.presets)));
   progress.show("writing the reports");
   app::writeReports(report, paths, options.threads);
   progress.clear();
-  printLoadNotes(options.baked, validated.notes);
   const std::string character_name = fileNameOf(options.baked);
 
   if (options.json) std::cout << reportJson(report);

@@ -52,8 +52,8 @@ std::vector<std::string> splitClipNames(const std::string& list, const std::stri
   return names;
 }
 
-void printLoadNotes(const std::string& path, const std::vector<std::string>& notes) {
-  for (const std::string& note : notes) std::cerr << printableLine("note " + path + ": " + note) << "\n";
+app::NoteReport printNotesOf(const std::string& path) {
+  return [path](const std::string& note) { std::cerr << printableLine("note " + path + ": " + note) << "\n"; };
 }
 
 ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load) {
@@ -61,9 +61,7 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   source.path = path;
   source.load = load;
   source.map = options.map;
-  ResolvedCharacter resolved = app::loadCharacter(source, app::loadPresets(presetsDirectory(options)));
-  printLoadNotes(path, resolved.loaded.notes);
-  return resolved;
+  return app::loadCharacter(source, app::loadPresets(presetsDirectory(options)), printNotesOf(path));
 }
 
 void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout) {

@@ -53,7 +53,8 @@ using ResolvedCharacter = app::ResolvedCharacter;
 // app::loadCharacter() with the flags' presets directory and --map, its notes printed on stderr (what an
 // FBX or a VRM 0.x -> 1.0 conversion did and left out; a glTF input loaded as it is has none).
 ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load = {});
-void printLoadNotes(const std::string& path, const std::vector<std::string>& notes);
+// Prints each note of the file at `path` on stderr as it comes ("note PATH: ...").
+app::NoteReport printNotesOf(const std::string& path);
 
 // Where an options struct's field comes from on the command line: app/ and pipeline/ name a bad option
 // by its field (InvalidOption, core/error.h), the user knows the flag.

@@ -91,7 +91,7 @@ TEST_CASE("app: bakeJob makes every output's bytes and says what it baked") {
   const std::vector<PackedInfluences> packed = decodePackedFile(out.packed, "packed");
   REQUIRE(packed.size() == out.bake.parts.size());
   for (size_t p = 0; p < packed.size(); ++p) CHECK(packed[p].vertex_count == out.bake.parts[p].packed.vertex_count);
-  CHECK(out.notes.empty());
+  CHECK(out.character.loaded.notes.empty());
 }
 
 TEST_CASE("cli validate: a file whose landmarks do not resolve is read once, so a pipe works, and the report says why") {
