@@ -9,22 +9,17 @@
 // `error-only MUSCLES.json` is that re-bake without the volume figures (BakeOptions::measure_quality
 // off): the work issue 14 was filed against, before issue 11 added the response fit and the per-frame
 // volumes of three skinnings; every frame of every clip still gets the deformation error.
+//
+// The bake is app::bakeJob's, as `rigbake bake` runs it; the stages are its BakeJobTimings: load (the file
+// and its landmarks), place (muscle preset, muscles, body regions), the bake's own stages, and write (the
+// bytes of every output bake makes: model, stats, packed influences, muscle JSON; not the disk write).
 #include <sys/resource.h>
 
-#include <chrono>
 #include <iostream>
 #include <nlohmann/json.hpp>
-#include <tiny_gltf.h>
 
-#include "anatomy/body_regions.h"
-#include "anatomy/placement.h"
-#include "formats/gltf_bake.h"
-#include "formats/gltf_document.h"
-#include "formats/gltf_write.h"
-#include "formats/muscle_json.h"
+#include "app/bake_job.h"
 #include "formats/atomic_file.h"
-#include "formats/preset_json.h"
-#include "pipeline/bake.h"
 
 using namespace rigbake;
 
@@ -44,45 +39,25 @@ int main(int argc, char** argv) {
   const std::string muscles_path = argc > 7 ? argv[7] : "";
   const bool error_only = mode == "error-only";
   const bool fitted = mode == "fitted" || error_only;
-  auto clock = std::chrono::steady_clock::now();
-  auto lap = [&clock]() {
-    auto now = std::chrono::steady_clock::now();
-    double seconds = std::chrono::duration<double>(now - clock).count();
-    clock = now;
-    return seconds;
-  };
   try {
-    LoadedCharacter loaded = loadCharacter(input);
-    const double load = lap();
-    std::vector<NamingMap> maps = readNamingMaps(presets + "/skeletons");
-    LandmarkRules rules = readLandmarkRules(presets + "/landmarks.json");
-    MusclePreset preset = readMusclePreset(presets + "/muscles/gow_biped.json");
-    LandmarkInputs inputs;
-    inputs.maps = &maps;
-    inputs.rules = &rules;
-    LandmarkSet landmarks = resolveLandmarks(loaded.character, inputs);
-    MuscleSet muscles = fitted ? readMuscleJson(muscles_path, loaded.character, landmarks, preset)
-                               : placeMuscles(loaded.character, landmarks, preset, Sides::kBoth);
-    BakeOptions options;
-    options.influences = influences;
-    options.threads = threads;
-    options.measure_quality = !error_only;
-    // The body regions `bake` measures and fits by default (--regions body): without them the bench
-    // timed a lighter fit and lighter figures than the CLI runs.
-    const RegionPreset region_preset = readRegionPreset(presets + "/regions/body.json");
-    options.regions = resolveBodyRegions(loaded.character, landmarks, region_preset);
-    options.creases = resolveCreases(loaded.character, landmarks, region_preset.creases);
-    const double place = lap();
+    // As `rigbake bake INPUT --influences N --threads T -o OUTPUT` bakes it (gow_biped, the body regions),
+    // with the muscles of `fitted` read as --muscles reads them.
+    app::BakeRequest request;
+    request.character.path = input;
+    request.output = output;
+    request.muscles = fitted ? muscles_path : "";
+    request.options.influences = influences;
+    request.options.threads = threads;
+    request.options.measure_quality = !error_only;
+    const app::Presets presets_read = app::loadPresets(presets);
+    const app::BakeOutputs out = app::bakeJob(request, presets_read);
     if (mode == "fit") {
-      const MuscleSet fitted_muscles = bakeCharacter(loaded.character, muscles, options).muscles;
-      writeFileAtomically(muscles_path, muscleJson(fitted_muscles, loaded.character.skeleton, preset.name));
+      writeFileAtomically(muscles_path, out.muscles_json);
       return 0;
     }
-    BakeTimings timings;
-    BakeResult bake = bakeCharacter(loaded.character, muscles, options, &timings);
-    lap();
-    writeGltf(bakedModel(*loaded.document, loaded.character, bake), output);
-    const double write = lap();
+    writeFileAtomically(output, out.model);
+    const BakeResult& bake = out.bake;
+    const app::BakeJobTimings& timings = out.timings;
     // Frames sampled over every clip: with the vertices and influences, the bench's unit of work.
     size_t frames = 0;
     for (const BakedClip& clip : bake.clips) frames += clip.times.size();
@@ -96,15 +71,15 @@ int main(int argc, char** argv) {
                                 {"threads", threads},
                                 {"fitted", fitted},
                                 {"volumes", !error_only},
-                                {"load", load},
-                                {"place", place},
-                                {"evaluate", timings.evaluate},
-                                {"weights", timings.weights},
-                                {"fit", timings.fit},
-                                {"pack", timings.pack},
-                                {"error", timings.error},
-                                {"quality", timings.quality},
-                                {"write", write},
+                                {"load", timings.load},
+                                {"place", timings.place},
+                                {"evaluate", timings.bake.evaluate},
+                                {"weights", timings.bake.weights},
+                                {"fit", timings.bake.fit},
+                                {"pack", timings.bake.pack},
+                                {"error", timings.bake.error},
+                                {"quality", timings.bake.quality},
+                                {"write", timings.write},
                                 {"peak_mb", usage.ru_maxrss / 1024.0}}
                      .dump()
               << "\n";

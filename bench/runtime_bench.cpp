@@ -35,11 +35,9 @@
 #include <xmmintrin.h>
 #endif
 
-#include "anatomy/placement.h"
+#include "app/bake_job.h"
 #include "formats/gltf_document.h"
-#include "formats/jiggle_json.h"
 #include "formats/muscle_rig_extension.h"
-#include "formats/preset_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/jiggle.h"
 #include "pipeline/muscle_joint.h"
@@ -252,24 +250,20 @@ nlohmann::json jiggleRow(const char* real, double fps, size_t jiggles, const Jig
 
 int benchJiggle(const std::string& input, const std::string& presets, const std::string& muscle_preset,
                 const std::string& jiggle_preset) {
-  LoadedCharacter loaded = loadCharacter(input);
-  const Character& character = loaded.character;
-  std::vector<NamingMap> maps = readNamingMaps(presets + "/skeletons");
-  LandmarkRules rules = readLandmarkRules(presets + "/landmarks.json");
-  LandmarkInputs inputs;
-  inputs.maps = &maps;
-  inputs.rules = &rules;
-  const LandmarkSet landmarks = resolveLandmarks(character, inputs);
-  const MusclePreset preset = readMusclePreset(presets + "/muscles/" + muscle_preset + ".json");
-  const MuscleSet muscles = placeMuscles(character, landmarks, preset, Sides::kBoth);
   // The bake resolves the preset against the placed muscles and chooses each muscle's carrier joint;
-  // its result holds both, as they go into the file's extension.
-  BakeOptions options;
-  options.influences = 10;
-  options.measure_quality = false;
-  options.jiggles = resolveJiggles(readJigglePreset(presets + "/jiggle/" + jiggle_preset + ".json"), character.skeleton,
-                                   &landmarks, &muscles);
-  const BakeResult bake = bakeCharacter(character, muscles, options);
+  // its result holds both, as they go into the file's extension. No volume figures, no regions: only
+  // the rig is timed here.
+  app::BakeRequest request;
+  request.character.path = input;
+  request.output = "unwritten.glb";
+  request.preset = muscle_preset;
+  request.regions = "";
+  request.jiggle = jiggle_preset;
+  request.options.influences = 10;
+  request.options.measure_quality = false;
+  const app::BakeOutputs out = app::bakeJob(request, app::loadPresets(presets));
+  const Character& character = out.character.loaded.character;
+  const BakeResult& bake = out.bake;
   const runtime::MuscleRig<double> muscle_rig = buildMuscleRig(bake.muscles, character.skeleton);
   std::vector<int> carriers;
   for (const MusclePart& part : bake.muscles.parts) carriers.push_back(muscleCarrierJoint(part));

@@ -1,29 +1,18 @@
 // `rigbake bake CHAR --muscles muscles.json -o baked.glb`: muscle joints, their animation and skin
 // weights into a new glTF, with the deformation error and memory figures of the chosen influence count.
 #include <iomanip>
-#include <sstream>
 #include <iostream>
-#include <nlohmann/json.hpp>
+#include <sstream>
 
+#include "app/bake_job.h"
 #include "core/error.h"
-#include "anatomy/placement.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/progress.h"
 #include "formats/atomic_file.h"
-#include "formats/gltf_bake.h"
-#include "formats/gltf_write.h"
-#include "formats/jiggle_json.h"
-#include "formats/json_text.h"
-#include "formats/muscle_json.h"
-#include "formats/packed_file.h"
-#include "formats/preset_json.h"
-#include "formats/quality_json.h"
-#include "formats/vrm_spring.h"
+#include "formats/bake_stats_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/leg_coverage.h"
-#include "pipeline/memory_table.h"
-#include "pipeline/rom.h"
 
 namespace rigbake::cli {
 namespace {
@@ -55,165 +44,27 @@ struct BakeCommandOptions {
   PresetOptions presets;
 };
 
-nlohmann::json errorJson(const DeformationError& error) {
-  return {{"max", error.max_displacement * 1000.0}, {"rms", error.rms_displacement * 1000.0}};
-}
-
-// Where to look in the input file: the glTF mesh, primitive and vertex, and when in which clip.
-nlohmann::json peakJson(const Character& character, const BakedClip& clip, const ErrorPeak& peak) {
-  if (peak.vertex < 0) return nullptr;
-  const MeshPart& mesh = character.meshes[peak.mesh_part];
-  return {{"clip", clip.name},          {"time_s", peak.time},
-          {"mesh", mesh.name},          {"gltf_mesh", mesh.gltf_mesh},
-          {"primitive", mesh.gltf_primitive}, {"vertex", peak.vertex}};
-}
-
-// max, rms, worst and per_clip of one set of rounded weights.
-nlohmann::json deformationJson(const Character& character, const BakeResult& bake, const DeformationFigures& figures) {
-  nlohmann::json per_clip = nlohmann::json::object();
-  for (size_t c = 0; c < bake.clips.size(); ++c) {
-    per_clip[bake.clips[c].name] = errorJson(figures.per_clip[c]);
-    per_clip[bake.clips[c].name]["worst"] = peakJson(character, bake.clips[c], figures.peaks[c]);
-  }
-  nlohmann::json error = errorJson(figures.overall);
-  error["worst"] = figures.peak_clip < 0
-                       ? nlohmann::json()
-                       : peakJson(character, bake.clips[figures.peak_clip], figures.peaks[figures.peak_clip]);
-  error["per_clip"] = per_clip;
-  return error;
-}
-
-nlohmann::json statsJson(const BakeCommandOptions& options, const Character& character, const MuscleSet& muscles,
-                         const BakeResult& bake) {
-  int gltf_bytes = 0, packed_bytes = 0;
-  if (!bake.parts.empty()) {
-    const BakedPart& first = bake.parts.front();
-    for (const VertexAttributeData& a : first.standard) gltf_bytes += static_cast<int>(a.bytes.size() / a.accessor.count);
-    packed_bytes = packedSkinBytesPerVertex(bake.influences, first.packed.index_bytes);
-  }
-  nlohmann::json table = nlohmann::json::array();
-  for (const SkinLayoutSize& layout : skinMemoryTable(bake.vertex_count)) {
-    table.push_back({{"layout", layout.id},
-                     {"influences", layout.influences},
-                     {"bytes_per_vertex", layout.bytes_per_vertex},
-                     {"total_bytes", layout.total_bytes}});
-  }
-  nlohmann::json stats = {
-      {"character", fileNameOf(options.character)},
-      {"output", fileNameOf(options.output)},
-      {"units", "m"},
-      {"influences", bake.influences},
-      {"muscle_joints", muscles.parts.size()},
-      // Nodes the file gains: each muscle's skinned joint, and its base, tip and driver with --helper-joints.
-      {"joints_added", bake.helper_joints ? bake.joints.size() : muscles.parts.size()},
-      {"vertices", bake.vertex_count},
-      {"clips", bake.clips.size()},
-      {"deformation_error_mm", deformationJson(character, bake, bake.error)},
-      {"gltf_weights", gltfWeightsName(bake.gltf_weights)},
-      {"bytes_per_vertex", {{"gltf", gltf_bytes}, {"packed", packed_bytes}}},
-      {"bytes_total", {{"gltf", static_cast<long long>(gltf_bytes) * bake.vertex_count},
-                       {"packed", static_cast<long long>(packed_bytes) * bake.vertex_count}}},
-      {"memory_table", table},
-  };
-  if (bake.gltf_weights == GltfWeights::kUnorm16) stats["gltf_deformation_error_mm"] = deformationJson(character, bake, bake.gltf_error);
-  stats["deformation_quality"] = deformationQualityJson(bake.quality);
-  return stats;
-}
-
-int run(const BakeCommandOptions& options) {
-  checkOutputOptions({{"-o", options.output, true},
-                      {"--packed-out", options.packed_output, false},
-                      {"--stats", options.stats_output, false, true},
-                      {"--muscles-out", options.muscles_output, false, true}},
-                     options.json);
-  ProgressLine progress("rigbake bake", options.progress);
-  progress.show("loading the character");
-  MusclePreset preset = loadMusclePreset(options.presets, options.preset);
-  LoadOptions load;
-  if (!options.vrm.empty()) load.vrm = options.vrm == "1" ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
-  ResolvedCharacter resolved = loadAndResolve(options.character, options.presets, load);
-  // --rom: the range-of-motion clips join the character's own in memory only, so the weight rounding and
-  // the deformation figures see them, but the written file does not hold them (docs/rom.md).
-  RomPreset rom_preset;  // outlives `rom`, whose clips point at their specs in it
-  RomResult rom;
-  if (!options.rom.empty()) {
-    rom_preset = loadRomPreset(options.presets, options.rom);
-    rom = buildRom(resolved.loaded.character, resolved.landmarks, rom_preset);
-    appendMeasureOnlyClips(&resolved.loaded.character, rom);
-  }
-  const Character& character = resolved.loaded.character;
-  progress.show(options.muscles.empty() ? "placing the muscles" : "reading the muscles");
-  MuscleSet muscles = options.muscles.empty()
-                          ? placeMuscles(character, resolved.landmarks, preset, Sides::kBoth)
-                          : readMuscleJson(options.muscles, character, resolved.landmarks, preset);
-  BakeOptions bake_options;
-  bake_options.influences = options.influences;
-  parseGltfWeights(options.gltf_weights, &bake_options.gltf_weights);  // CLI11 has checked the name
-  bake_options.fps = options.fps;
-  bake_options.threads = options.threads;
-  parseResponseMode(options.response, &bake_options.response);  // CLI11 has checked the name
-  bake_options.fit.max_poses = options.fit_poses;
-  parseMuscleMotion(options.muscle_motion, &bake_options.motion);
-  bake_options.helper_joints = options.helper_joints;
-  const RegionPreset region_preset = readRegionPreset(presetFile(options.presets, "regions", options.regions));
-  bake_options.regions = resolveBodyRegions(character, resolved.landmarks, region_preset);
-  bake_options.creases = resolveCreases(character, resolved.landmarks, region_preset.creases);
-  if (!options.jiggle.empty()) {
-    bake_options.jiggles =
-        resolveJiggles(readJigglePreset(presetFile(options.presets, "jiggle", options.jiggle)), character.skeleton, &resolved.landmarks, &muscles);
-  } else if (!options.hits.empty()) {
-    fail(errc::USAGE, "--hits", "needs --jiggle: hits kick jiggle joints");
-  }
-  if (!options.hits.empty()) bake_options.hits = readHits(options.hits);
-  if (options.springs_only && options.jiggle.empty()) fail(errc::USAGE, "--vrm-springs-only", "needs --jiggle");
-  BakeOptions baked_motion = bake_options;
-  if (options.springs_only) baked_motion.jiggles.clear();
-  baked_motion.progress = progress.report();
-  BakeResult bake = bakeCharacter(character, muscles, baked_motion);
-  progress.show("writing the files");
-  nlohmann::json stats = statsJson(options, character, muscles, bake);
-  if (!options.rom.empty()) stats["rom"] = romJson(rom, character.skeleton);
-  const LegCoverage legs = legCoverage(character, resolved.landmarks, muscles);
-  const bool legs_uncovered = legs.legs && !legs.covered && legs.largest_turn_deg > kLegTurnWorthMuscles;
-  stats["legs"] = {{"found", legs.legs}, {"covered_by_muscles", legs.covered}, {"largest_turn_deg", legs.largest_turn_deg},
-                   {"clip", legs.clip}, {"joint", legs.joint}};
-
-  // Everything is computed before anything is written, so a failure leaves no output behind.
-  const bool vrm_springs = !bake_options.jiggles.empty() && isVrmDocument(*resolved.loaded.document);
-  if (options.springs_only && !vrm_springs)
-    fail(errc::USAGE, "--vrm-springs-only", options.character + " is not a VRM, so there is nowhere to put spring bones");
-  const BakedFile file = writeBakedFile(*resolved.loaded.document, character, bake, isBinaryGltfPath(options.output),
-                                        vrm_springs ? bake_options.jiggles : std::vector<JiggleSetup>{});
-  stats["animation_bytes"] = {{"input", file.input_animation_bytes}, {"output", file.animation_bytes},
-                              {"muscle_motion", muscleMotionName(bake.motion)}};
-  std::vector<PackedInfluences> packed;
-  for (const BakedPart& part : bake.parts) packed.push_back(part.packed);
-  // All the outputs or none: a --stats that cannot be written must not leave a new -o behind.
-  OutputBatch outputs;
-  outputs.add(options.output, file.bytes);
-  if (!options.packed_output.empty()) outputs.add(options.packed_output, encodePackedFile(packed));
-  if (!options.stats_output.empty()) outputs.add(options.stats_output, jsonText(stats) + "\n");
-  if (!options.muscles_output.empty())
-    outputs.add(options.muscles_output, muscleJson(bake.muscles, character.skeleton, options.preset));
-  outputs.commit();
-
-  progress.clear();
-  if (options.json) std::cout << jsonText(stats) << "\n";
-  std::cerr << std::fixed << std::setprecision(4) << "baked " << muscles.parts.size() << " muscles ("
-            << stats["joints_added"].get<int>() << " joints added) into " << options.output << ": " << bake.influences
+// The figures on stderr: the bake, its error and where it peaks, volumes, roughness, creases, seams,
+// legs, jiggles and VRM constraints.
+void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out) {
+  const Character& character = out.character.loaded.character;
+  const BakeResult& bake = out.bake;
+  const LegCoverage& legs = out.legs;
+  std::cerr << std::fixed << std::setprecision(4) << "baked " << bake.muscles.parts.size() << " muscles ("
+            << jointsAdded(bake) << " joints added) into " << options.output << ": " << bake.influences
             << " influences/vertex, " << bake.vertex_count << " vertices, " << bake.clips.size() << " clips; ";
   // Without a clip nothing moved, so there is no deformation to state (never "max 0.0000 mm").
   if (bake.clips.empty())
     std::cerr << "no clip, so no deformation measured (--rom measures on range-of-motion clips)";
   else
-    std::cerr << "deformation error max " << stats["deformation_error_mm"]["max"].get<double>() << " mm, rms "
-              << stats["deformation_error_mm"]["rms"].get<double>() << " mm";
-  std::cerr << "; skin data " << stats["bytes_per_vertex"]["gltf"].get<int>() << " B/vertex as glTF, "
-            << stats["bytes_per_vertex"]["packed"].get<int>() << " B/vertex packed\n";
+    std::cerr << "deformation error max " << 1000.0 * bake.error.overall.max_displacement << " mm, rms "
+              << 1000.0 * bake.error.overall.rms_displacement << " mm";
+  std::cerr << "; skin data " << skinBytesPerVertex(bake).gltf << " B/vertex as glTF, "
+            << skinBytesPerVertex(bake).packed << " B/vertex packed\n";
   if (bake.gltf_weights == GltfWeights::kUnorm16) {
     std::cerr << "WEIGHTS_n in 1/65535 steps: deformation error max "
-              << stats["gltf_deformation_error_mm"]["max"].get<double>() << " mm, rms "
-              << stats["gltf_deformation_error_mm"]["rms"].get<double>() << " mm (the figures above are the packed "
+              << 1000.0 * bake.gltf_error.overall.max_displacement << " mm, rms "
+              << 1000.0 * bake.gltf_error.overall.rms_displacement << " mm (the figures above are the packed "
               << "0.001 weights')\n";
   }
   if (bake.error.peak_clip >= 0) {
@@ -296,26 +147,84 @@ int run(const BakeCommandOptions& options) {
               << std::max(0.0, 1000.0 * (worst->seams.rig - worst->seams.input)) << " mm beyond the input skinning (in '"
               << worst->clip << "')\n";
   }
-  if (legs_uncovered) {
+  if (legs.legs && !legs.covered && legs.largest_turn_deg > kLegTurnWorthMuscles) {
     std::cerr << std::setprecision(0) << "note: " << (options.muscles.empty() ? "preset '" + options.preset + "'" : options.muscles)
               << " has no muscle across the hips or knees, and clip '" << legs.clip << "' turns " << legs.joint << " by "
               << legs.largest_turn_deg << " degrees: the legs stay plain skinning (--preset gow_fullbody covers them)\n";
   }
-  if (!bake_options.jiggles.empty()) {
+  if (out.jiggles > 0) {
     // Where the jiggle lives in the file: a runtime bake writes no channels, so its jiggles are the
     // extension's, simulated by the engine (docs/jiggle.md).
     const char* where = options.springs_only                   ? "not baked"
                         : bake.motion == MuscleMotion::kRuntime ? "in the RIGBAKE_muscle_rig extension, simulated at run time (no channels)"
                         : bake.motion == MuscleMotion::kBoth    ? "baked into every clip, and in the RIGBAKE_muscle_rig extension"
                                                                 : "baked into every clip";
-    std::cerr << "jiggle: " << bake_options.jiggles.size() << " joints, " << bake_options.hits.size() << " hits, " << where
-              << (vrm_springs ? "; exported as VRM spring bones, without their cones (VRM springs have none; docs/jiggle.md)" : "")
+    std::cerr << "jiggle: " << out.jiggles << " joints, " << out.hits << " hits, " << where
+              << (out.vrm_springs ? "; exported as VRM spring bones, without their cones (VRM springs have none; docs/jiggle.md)" : "")
               << "\n";
   }
-  if (file.vrm_constrained_muscles > 0) {
-    std::cerr << "VRM 1.0: the base and tip joints of " << file.vrm_constrained_muscles
+  if (out.vrm_constrained_muscles > 0) {
+    std::cerr << "VRM 1.0: the base and tip joints of " << out.vrm_constrained_muscles
               << " muscles carry VRMC_node_constraint aim constraints (docs/extensions.md)\n";
   }
+}
+
+// Where each field of app::BakeRequest and BakeOptions comes from on the command line.
+// (The fields app::bakeJob and bakeCharacter name in an InvalidOption.)
+const std::vector<FlagName> kBakeFlags = {
+    {"influences", "--influences"}, {"fps", "--fps"}, {"hits", "--hits"}, {"springs_only", "--vrm-springs-only"}};
+
+app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const ProgressReport& progress) {
+  app::BakeRequest request;
+  request.character.path = options.character;
+  if (!options.vrm.empty()) request.character.load.vrm = options.vrm == "1" ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
+  request.character.map = options.presets.map;
+  request.output = options.output;
+  request.preset = options.preset;
+  request.muscles = options.muscles;
+  request.rom = options.rom;
+  request.regions = options.regions;
+  request.jiggle = options.jiggle;
+  request.hits = options.hits;
+  request.springs_only = options.springs_only;
+  request.packed = !options.packed_output.empty();
+  BakeOptions& bake = request.options;
+  bake.influences = options.influences;
+  parseGltfWeights(options.gltf_weights, &bake.gltf_weights);  // CLI11 has checked the name
+  bake.fps = options.fps;
+  bake.threads = options.threads;
+  parseResponseMode(options.response, &bake.response);  // CLI11 has checked the name
+  bake.fit.max_poses = options.fit_poses;
+  parseMuscleMotion(options.muscle_motion, &bake.motion);
+  bake.helper_joints = options.helper_joints;
+  request.progress = progress;
+  request.notes = printNotesOf(options.character);
+  return request;
+}
+
+int run(const BakeCommandOptions& options) {
+  checkOutputOptions({{"-o", options.output, true},
+                      {"--packed-out", options.packed_output, false},
+                      {"--stats", options.stats_output, false, true},
+                      {"--muscles-out", options.muscles_output, false, true}},
+                     options.json);
+  if (!options.hits.empty() && options.jiggle.empty()) fail(errc::USAGE, "--hits", "needs --jiggle: hits kick jiggle joints");
+  if (options.springs_only && options.jiggle.empty()) fail(errc::USAGE, "--vrm-springs-only", "needs --jiggle");
+  ProgressLine progress("rigbake bake", options.progress);
+  const app::Presets presets = app::loadPresets(presetsDirectory(options.presets));
+  const app::BakeOutputs out = withFlagNames(kBakeFlags, [&] { return app::bakeJob(bakeRequestOf(options, progress.report()), presets); });
+
+  // All the outputs or none: a --stats that cannot be written must not leave a new -o behind.
+  OutputBatch outputs;
+  outputs.add(options.output, out.model);
+  if (!options.packed_output.empty()) outputs.add(options.packed_output, out.packed);
+  if (!options.stats_output.empty()) outputs.add(options.stats_output, out.stats_json);
+  if (!options.muscles_output.empty()) outputs.add(options.muscles_output, out.muscles_json);
+  outputs.commit();
+
+  progress.clear();
+  if (options.json) std::cout << out.stats_json;
+  printFigures(options, out);
   return 0;
 }
 

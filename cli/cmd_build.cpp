@@ -13,7 +13,7 @@
 #include <thread>
 
 #include "core/error.h"
-#include "cli/build_job.h"
+#include "app/build_job.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/progress.h"
@@ -24,6 +24,11 @@
 
 namespace rigbake::cli {
 namespace {
+
+using app::JobOutcome;
+using app::JobStatus;
+using app::failedJob;
+using app::jobStatusName;
 
 struct BuildCommandOptions {
   std::string manifest;
@@ -76,6 +81,9 @@ JobOutcome sourceFailed(const BuildManifest& manifest, const BuildCharacter& cha
 int run(const BuildCommandOptions& options) {
   const std::string presets_dir = presetsDirectory(options.presets);
   if (options.emit_ninja_given && options.emit_ninja.empty()) fail(errc::USAGE, "--emit-ninja", "names no file (an empty path)");
+  // Each character's naming map is the manifest's to give: a flag for all would not be in the stamps.
+  if (!options.presets.map.empty())
+    fail(errc::USAGE, "--map", "build takes the naming map from the manifest (\"map\", docs/build.md), not from a flag");
   if (options.emit_ninja_given) checkOutputPath(options.emit_ninja);
   BuildManifest manifest = readBuildManifest(options.manifest, presets_dir);
   if (options.emit_ninja_given) {
@@ -120,20 +128,20 @@ int run(const BuildCommandOptions& options) {
     std::vector<std::string> outputs = {manifest.out + "/summary.json", manifest.out + "/summary.junit.xml"};
     for (const BuildCharacter& character : manifest.characters) {
       const CharacterOutputs out = characterOutputs(manifest, character);
-      for (const std::string& path : {out.model, out.muscles, out.report_json, out.report_junit, out.report_html, out.stamp})
-        outputs.push_back(path);
+      for (const std::string& path : out.files()) outputs.push_back(path);
+      outputs.push_back(out.stamp);
     }
     removeTemporaryLeftovers(outputs);
   }
 
   if (options.summary_only) {
     std::vector<JobOutcome> outcomes;
-    for (size_t i = 0; i < manifest.characters.size(); ++i) outcomes.push_back(readJobOutcome(manifest, manifest.characters[i]));
+    for (size_t i = 0; i < manifest.characters.size(); ++i) outcomes.push_back(app::readJobOutcome(manifest, manifest.characters[i]));
     writeSummary(manifest, outcomes);
     return 0;
   }
 
-  SharedPresets shared = loadSharedPresets(presets_dir);
+  const app::Presets shared = app::loadPresets(presets_dir);
   const int jobs = options.jobs > 0 ? options.jobs : std::max(1u, std::thread::hardware_concurrency());
   // The cores the characters running at once leave each bake (its outputs are the same at any count).
   const int workers = std::max(1, std::min<int>(jobs, static_cast<int>(selected.size())));
@@ -187,7 +195,7 @@ int run(const BuildCommandOptions& options) {
       lock.unlock();
       auto start = std::chrono::steady_clock::now();
       JobOutcome outcome = source_failed ? sourceFailed(manifest, character)
-                                         : runCharacterJob(manifest, character, shared, options.force, bake_threads);
+                                         : app::runCharacterJob(manifest, character, shared, options.force, bake_threads);
       double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       lock.lock();
       outcomes[index] = outcome;

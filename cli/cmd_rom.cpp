@@ -3,13 +3,14 @@
 // which measure on the same clips without writing them).
 #include <iostream>
 #include <set>
-#include <tiny_gltf.h>
 
 #include "core/error.h"
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "formats/gltf_clips.h"
+#include "formats/atomic_file.h"
 #include "formats/gltf_write.h"
+#include "formats/rom_json.h"
 #include "formats/json_text.h"
 #include "pipeline/rom.h"
 
@@ -39,7 +40,7 @@ int run(const RomCommandOptions& options) {
     for (const Track& track : clip.clip.tracks) keyed.insert(track.joint);
   }
   // Everything is computed before anything is written, so a failure leaves no output behind.
-  writeGltf(modelWithClips(*resolved.loaded.document, character, clips), options.output);
+  writeFileAtomically(options.output, gltfWithClips(*resolved.loaded.document, character, clips, isBinaryGltfPath(options.output)));
 
   if (options.json) {
     nlohmann::json summary = {{"character", fileNameOf(options.character)},

@@ -8,7 +8,7 @@
 #include "cli/commands.h"
 #include "cli/common.h"
 #include "cli/progress.h"
-#include "cli/validation_run.h"
+#include "app/validate_job.h"
 #include "formats/report_json.h"
 #include "formats/validate_config.h"
 #include "pipeline/checks.h"
@@ -34,14 +34,14 @@ struct ValidateCommandOptions {
 
 int run(const ValidateCommandOptions& options) {
   if (options.report_dir.empty()) fail(errc::USAGE, "--report", "names no directory (an empty path)");
-  const ReportPaths paths = reportPathsIn(options.report_dir);
+  const app::ReportPaths paths = app::reportPathsIn(options.report_dir);
   checkOutputOptions({{"--report", paths.json, true}, {"--report", paths.junit, true}, {"--report", paths.html, true}});
   ProgressLine progress("rigbake validate", options.progress);
-  ValidationRequest request;
+  app::ValidationRequest request;
   request.baked = options.baked;
   request.muscles = options.muscles;
   request.preset = options.preset;
-  request.presets = options.presets;
+  request.map = options.presets.map;
   if (!options.config.empty()) request.config = readValidationConfig(options.config);
   request.khronos = options.khronos;
   request.rom = options.rom;
@@ -49,9 +49,10 @@ int run(const ValidateCommandOptions& options) {
   request.pictures = options.pictures;
   request.progress = progress.report();
   request.threads = options.threads;
-  const Report report = validateBakedFile(request);
+  request.notes = printNotesOf(options.baked);
+  const Report report = app::validateJob(request, app::loadPresets(presetsDirectory(options.presets)));
   progress.show("writing the reports");
-  writeReports(report, paths, options.threads);
+  app::writeReports(report, paths, options.threads);
   progress.clear();
   const std::string character_name = fileNameOf(options.baked);
 

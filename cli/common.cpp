@@ -9,6 +9,7 @@
 #include "formats/atomic_file.h"
 #include "formats/preset_json.h"
 #include "formats/rom_json.h"
+#include "app/character.h"
 
 namespace rigbake::cli {
 
@@ -27,16 +28,8 @@ std::string presetsDirectory(const PresetOptions& options) {
   return RIGBAKE_DEFAULT_PRESET_DIR;
 }
 
-namespace {
-bool exists(const std::string& path) { return std::ifstream(path).good(); }
-}  // namespace
-
 std::string presetFile(const PresetOptions& options, const std::string& kind, const std::string& name_or_path) {
-  if (exists(name_or_path)) return name_or_path;
-  std::string shipped = presetsDirectory(options) + "/" + kind + "/" + name_or_path + ".json";
-  if (exists(shipped)) return shipped;
-  fail(errc::IO_FILE_NOT_FOUND, name_or_path, "no such preset file, and no shipped preset of that name in " +
-                                              presetsDirectory(options) + "/" + kind + "/");
+  return app::presetFile(presetsDirectory(options), kind, name_or_path);
 }
 
 MusclePreset loadMusclePreset(const PresetOptions& options, const std::string& name_or_path) {
@@ -59,74 +52,16 @@ std::vector<std::string> splitClipNames(const std::string& list, const std::stri
   return names;
 }
 
-namespace {
-// Six decimals: the axes are for reading, and the file's floats hold about seven digits anyway.
-double rounded(double value) { return std::round(value * 1e6) / 1e6 + 0.0; }
-}  // namespace
-
-nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton) {
-  nlohmann::json clips = nlohmann::json::array();
-  for (const RomClip& clip : rom.clips) {
-    nlohmann::json sides = nlohmann::json::array();
-    for (const RomSweep& sweep : clip.sweeps) {
-      nlohmann::json joints = nlohmann::json::array();
-      for (const RomKeyedJoint& keyed : sweep.joints) {
-        nlohmann::json joint = {{"joint", skeleton.names[keyed.joint]}, {"landmark", keyed.landmark}};
-        if (keyed.follower) joint["follows"] = true;
-        else joint["share"] = keyed.share;
-        joints.push_back(joint);
-      }
-      sides.push_back({{"side", sweep.side.empty() ? "central" : sweep.side},
-                       {"axis", {rounded(sweep.axis.x()), rounded(sweep.axis.y()), rounded(sweep.axis.z())}},
-                       {"rest_deg", rounded(sweep.zero_deg)},
-                       {"joints", joints}});
-    }
-    const RomClipSpec& spec = *clip.spec;
-    clips.push_back({{"name", clip.name},
-                     {"animation", clip.clip.name},
-                     {"duration_s", clip.clip.duration},
-                     {"keys", clip.angle_deg.size()},
-                     {"curve", spec.curve == RomCurve::kRiseAndFall ? "rise_and_fall" : "swing"},
-                     {"from_deg", spec.from_deg},
-                     {"to_deg", spec.to_deg},
-                     {"peak_s", clip.peak_time},
-                     {"sides", sides}});
-  }
-  nlohmann::json skipped = nlohmann::json::array();
-  for (const RomSkipped& s : rom.skipped) skipped.push_back({{"name", s.name}, {"reason", s.reason}});
-  return {{"clips", clips}, {"skipped", skipped}};
+app::NoteReport printNotesOf(const std::string& path) {
+  return [path](const std::string& note) { std::cerr << printableLine("note " + path + ": " + note) << "\n"; };
 }
 
 ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load) {
-  const std::string dir = presetsDirectory(options);
-  std::vector<NamingMap> maps = readNamingMaps(dir + "/skeletons");
-  LandmarkRules rules = readLandmarkRules(dir + "/landmarks.json");
-  NamingMap forced;
-  LandmarkInputs inputs;
-  inputs.maps = &maps;
-  inputs.rules = &rules;
-  if (!options.map.empty()) {
-    if (exists(options.map)) {
-      forced = readNamingMap(options.map);
-    } else {
-      bool found = false;
-      for (const NamingMap& map : maps) {
-        if (map.name == options.map) {
-          forced = map;
-          found = true;
-        }
-      }
-      if (!found) fail(errc::MAP_NOT_FOUND, options.map, "neither a naming map file nor the name of a shipped map in " + dir + "/skeletons");
-    }
-    inputs.forced_map = &forced;
-  }
-  ResolvedCharacter resolved;
-  resolved.loaded = loadCharacter(path, load);
-  // What an FBX or a VRM 0.x -> 1.0 conversion did and left out (formats/fbx_to_gltf.h,
-  // formats/vrm0_to_vrm1.h); a glTF input loaded as it is has no notes.
-  for (const std::string& note : resolved.loaded.notes) std::cerr << printableLine("note " + path + ": " + note) << "\n";
-  resolved.landmarks = resolveLandmarks(resolved.loaded.character, inputs);
-  return resolved;
+  app::CharacterSource source;
+  source.path = path;
+  source.load = load;
+  source.map = options.map;
+  return app::loadCharacter(source, app::loadPresets(presetsDirectory(options)), printNotesOf(path));
 }
 
 void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout) {

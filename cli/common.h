@@ -5,8 +5,11 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "anatomy/landmarks.h"
+#include "core/error.h"
+#include "app/character.h"
 #include "anatomy/presets.h"
 #include "formats/gltf_document.h"
 #include "pipeline/rom.h"
@@ -33,10 +36,6 @@ RomPreset loadRomPreset(const PresetOptions& options, const std::string& name_or
 // "a,b" -> {"a", "b"} for --clips; USAGE for an empty name.
 std::vector<std::string> splitClipNames(const std::string& list, const std::string& option);
 
-// The ROM clips built on a character, for --json and --stats: per clip its name, animation, duration,
-// keys, range and peak, per side the axis, the rest angle and the joints keyed; and the skipped clips.
-nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton);
-
 // An output named on the command line, checked before any work: a required one may not be empty (USAGE),
 // and none may be an existing device, FIFO, socket or directory (IO_OUTPUT_NOT_REGULAR). "-" is standard
 // output where `to_stdout` allows it (JSON outputs, docs/output-contract.md) and USAGE elsewhere; at most
@@ -49,12 +48,32 @@ struct OutputOption {
 };
 void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout = false);
 
-struct ResolvedCharacter {
-  LoadedCharacter loaded;
-  LandmarkSet landmarks;
+using ResolvedCharacter = app::ResolvedCharacter;
+
+// app::loadCharacter() with the flags' presets directory and --map, its notes printed on stderr (what an
+// FBX or a VRM 0.x -> 1.0 conversion did and left out; a glTF input loaded as it is has none).
+ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load = {});
+// Prints each note of the file at `path` on stderr as it comes ("note PATH: ...").
+app::NoteReport printNotesOf(const std::string& path);
+
+// Where an options struct's field comes from on the command line: app/ and pipeline/ name a bad option
+// by its field (InvalidOption, core/error.h), the user knows the flag.
+struct FlagName {
+  const char* field;  // e.g. "influences" (BakeOptions::influences)
+  const char* flag;   // e.g. "--influences"
 };
 
-ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& options, const LoadOptions& load = {});
+// Runs `call`; an InvalidOption it throws becomes the USAGE error of the field's flag, in the same words.
+template <typename Call>
+auto withFlagNames(const std::vector<FlagName>& flags, Call&& call) -> decltype(call()) {
+  try {
+    return call();
+  } catch (const InvalidOption& option) {
+    for (const FlagName& name : flags)
+      if (option.field() == name.field) fail(errc::USAGE, name.flag, option.problem());
+    throw;
+  }
+}
 
 // "a/b/hero.glb" -> "hero.glb": outputs name inputs without directories so they do not depend on
 // where the tool ran.

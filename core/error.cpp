@@ -58,4 +58,9 @@ void fail(const ErrorCode& code, const std::string& where, const std::string& me
   throw Error(code, where, message);
 }
 
+InvalidOption::InvalidOption(const std::string& field, const std::string& problem)
+    : Error(errc::USAGE, field, problem), field_(field), problem_(problem) {}
+
+void failOption(const std::string& field, const std::string& problem) { throw InvalidOption(field, problem); }
+
 }  // namespace rigbake

@@ -97,6 +97,23 @@ class Error : public std::runtime_error {
 
 [[noreturn]] void fail(const ErrorCode& code, const std::string& where, const std::string& message);
 
+// An option out of range, or at odds with another, named by its field in the options struct
+// (BakeOptions::influences is "influences"). pipeline/ and app/ know no flags or manifest keys, so the
+// caller names the option as its user spelled it (cli/: a flag; build: a manifest key) and rethrows;
+// uncaught it is still a USAGE error, naming the field.
+class InvalidOption : public Error {
+ public:
+  InvalidOption(const std::string& field, const std::string& problem);
+  const std::string& field() const { return field_; }
+  const std::string& problem() const { return problem_; }
+
+ private:
+  std::string field_;
+  std::string problem_;
+};
+
+[[noreturn]] void failOption(const std::string& field, const std::string& problem);
+
 // The length of the well-formed UTF-8 sequence (RFC 3629: no overlong forms, surrogates or code points
 // past U+10FFFF) that starts at text[i], or 0. Text rigbake writes passes through it where the input
 // may have put bytes that are not UTF-8 (error lines, JUnit XML).

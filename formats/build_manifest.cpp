@@ -66,7 +66,8 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", errc::MANIFEST_INVALID);
   in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "vrm",
-                "out", "characters"});
+                "map", "regions", "jiggle", "hits", "vrm_springs_only", "fps", "fit_poses", "stats", "packed", "out",
+                "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -121,6 +122,43 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     return version;
   };
   if (in.has("vrm")) manifest.vrm = vrmOf(in.at("vrm"));
+  // A file relative to the manifest, else the name of a shipped preset under DEFAULT/KIND/.
+  auto shippedOrFile = [&](const JsonReader& value, const std::string& kind) -> std::string {
+    std::string name = value.asString();
+    std::string relative = resolve(manifest.directory, name);
+    if (!name.empty() && exists(relative)) return relative;
+    std::string shipped = default_preset_dir + "/" + kind + "/" + name + ".json";
+    if (!name.empty() && exists(shipped)) return shipped;
+    value.fail(kind + " preset '" + name + "' is neither a file (relative to the manifest) nor a shipped " + kind + " preset name");
+  };
+  // A naming map file relative to the manifest, else the name of a shipped map (checked when it is used,
+  // against the maps' own names, as bake --map).
+  auto mapOf = [&](const JsonReader& value) -> std::string {
+    std::string map = value.asString();
+    if (map.empty()) value.fail("must name a naming map file or a shipped map (it is empty)");
+    std::string relative = resolve(manifest.directory, map);
+    return exists(relative) ? relative : map;
+  };
+  auto hitsOf = [&](const JsonReader& value) {
+    std::string hits = value.asString();
+    if (hits.empty()) value.fail("must name a hit file (it is empty)");
+    return resolve(manifest.directory, hits);
+  };
+  auto fpsOf = [](const JsonReader& value) { return value.asNumberIn(0.0, 1e6, "frames per second"); };
+  auto fitPosesOf = [](const JsonReader& value) {
+    const int poses = value.asInt();
+    if (poses < 1 || poses > 100000) value.fail("must be from 1 to 100000");
+    return poses;
+  };
+  if (in.has("map")) manifest.map = mapOf(in.at("map"));
+  if (in.has("regions")) manifest.regions = shippedOrFile(in.at("regions"), "regions");
+  if (in.has("jiggle")) manifest.jiggle = shippedOrFile(in.at("jiggle"), "jiggle");
+  if (in.has("hits")) manifest.hits = hitsOf(in.at("hits"));
+  if (in.has("vrm_springs_only")) manifest.vrm_springs_only = in.at("vrm_springs_only").asBool();
+  if (in.has("fps")) manifest.fps = fpsOf(in.at("fps"));
+  if (in.has("fit_poses")) manifest.fit_poses = fitPosesOf(in.at("fit_poses"));
+  if (in.has("stats")) manifest.stats = in.at("stats").asBool();
+  if (in.has("packed")) manifest.packed = in.at("packed").asBool();
   auto outOf = [](const JsonReader& value) {
     std::string out = value.asString();
     if (out.empty()) value.fail("must name the output folder (it is empty)");
@@ -133,7 +171,8 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   for (size_t i = 0; i < characters.arraySize(); ++i) {
     JsonReader item = characters.at(i);
     item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom",
-                    "muscle_motion", "helper_joints", "response", "vrm"});
+                    "muscle_motion", "helper_joints", "response", "vrm", "map", "regions", "jiggle", "hits",
+                    "vrm_springs_only", "fps", "fit_poses", "stats", "packed"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -158,6 +197,18 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.helper_joints = item.has("helper_joints") ? item.at("helper_joints").asBool() : manifest.helper_joints;
     c.response = item.has("response") ? responseOf(item.at("response")) : manifest.response;
     c.vrm = item.has("vrm") ? vrmOf(item.at("vrm")) : manifest.vrm;
+    c.map = item.has("map") ? mapOf(item.at("map")) : manifest.map;
+    c.regions = item.has("regions") ? shippedOrFile(item.at("regions"), "regions") : manifest.regions;
+    c.jiggle = item.has("jiggle") ? shippedOrFile(item.at("jiggle"), "jiggle") : manifest.jiggle;
+    c.hits = item.has("hits") ? hitsOf(item.at("hits")) : manifest.hits;
+    c.vrm_springs_only = item.has("vrm_springs_only") ? item.at("vrm_springs_only").asBool() : manifest.vrm_springs_only;
+    c.fps = item.has("fps") ? fpsOf(item.at("fps")) : manifest.fps;
+    c.fit_poses = item.has("fit_poses") ? fitPosesOf(item.at("fit_poses")) : manifest.fit_poses;
+    c.stats = item.has("stats") ? item.at("stats").asBool() : manifest.stats;
+    c.packed = item.has("packed") ? item.at("packed").asBool() : manifest.packed;
+    // Hits kick jiggle joints, and spring bones are jiggles: neither means anything without a jiggle.
+    if (c.jiggle.empty() && !c.hits.empty()) item.fail("gives hits but no jiggle: hits kick jiggle joints");
+    if (c.jiggle.empty() && c.vrm_springs_only) item.fail("sets vrm_springs_only but gives no jiggle");
     manifest.characters.push_back(std::move(c));
   }
   buildOrder(manifest);  // reports unknown and cyclic muscles_from now, before any work

@@ -2,6 +2,7 @@
 // ordinary animations, after the file's own, which stay as they were.
 #pragma once
 
+#include <string>
 #include <vector>
 
 #include "anatomy/character.h"
@@ -18,5 +19,9 @@ namespace rigbake {
 // channel on the joint's node. Write it with writeGltf(). Clips marked measure_only are not written.
 tinygltf::Model modelWithClips(const GltfDocument& document, const Character& character,
                                const std::vector<Clip>& clips);
+
+// modelWithClips() as the bytes of a file: GLB when `binary`, glTF JSON otherwise (formats/gltf_write.h).
+std::string gltfWithClips(const GltfDocument& document, const Character& character, const std::vector<Clip>& clips,
+                          bool binary);
 
 }  // namespace rigbake

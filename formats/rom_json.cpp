@@ -1,6 +1,7 @@
 #include "formats/rom_json.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "core/error.h"
@@ -216,5 +217,43 @@ RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file) {
 }
 
 RomPreset readRomPreset(const std::string& path) { return parseRomPreset(readJsonFile(path), path); }
+
+namespace {
+// Six decimals: the axes are for reading, and the file's floats hold about seven digits anyway.
+double romRounded(double value) { return std::round(value * 1e6) / 1e6 + 0.0; }
+}  // namespace
+
+nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton) {
+  nlohmann::json clips = nlohmann::json::array();
+  for (const RomClip& clip : rom.clips) {
+    nlohmann::json sides = nlohmann::json::array();
+    for (const RomSweep& sweep : clip.sweeps) {
+      nlohmann::json joints = nlohmann::json::array();
+      for (const RomKeyedJoint& keyed : sweep.joints) {
+        nlohmann::json joint = {{"joint", skeleton.names[keyed.joint]}, {"landmark", keyed.landmark}};
+        if (keyed.follower) joint["follows"] = true;
+        else joint["share"] = keyed.share;
+        joints.push_back(joint);
+      }
+      sides.push_back({{"side", sweep.side.empty() ? "central" : sweep.side},
+                       {"axis", {romRounded(sweep.axis.x()), romRounded(sweep.axis.y()), romRounded(sweep.axis.z())}},
+                       {"rest_deg", romRounded(sweep.zero_deg)},
+                       {"joints", joints}});
+    }
+    const RomClipSpec& spec = *clip.spec;
+    clips.push_back({{"name", clip.name},
+                     {"animation", clip.clip.name},
+                     {"duration_s", clip.clip.duration},
+                     {"keys", clip.angle_deg.size()},
+                     {"curve", spec.curve == RomCurve::kRiseAndFall ? "rise_and_fall" : "swing"},
+                     {"from_deg", spec.from_deg},
+                     {"to_deg", spec.to_deg},
+                     {"peak_s", clip.peak_time},
+                     {"sides", sides}});
+  }
+  nlohmann::json skipped = nlohmann::json::array();
+  for (const RomSkipped& s : rom.skipped) skipped.push_back({{"name", s.name}, {"reason", s.reason}});
+  return {{"clips", clips}, {"skipped", skipped}};
+}
 
 }  // namespace rigbake

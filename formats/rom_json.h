@@ -14,4 +14,9 @@ namespace rigbake {
 RomPreset readRomPreset(const std::string& path);
 RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file);
 
+// The ROM clips built on a character, for `rom --json` and `bake --stats`: per clip its name, animation,
+// duration, keys, range and peak, per side the axis, the rest angle and the joints keyed; and the
+// skipped clips.
+nlohmann::json romJson(const RomResult& rom, const Skeleton& skeleton);
+
 }  // namespace rigbake

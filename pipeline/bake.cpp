@@ -253,8 +253,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   };
   const Skeleton& skeleton = character.skeleton;
   if (!isPackedInfluenceCount(options.influences))
-    fail(errc::USAGE, "--influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
-  if (options.fps < 0) fail(errc::USAGE, "--fps", "must be positive, or 0 for the clips' own key times");
+    failOption("influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
+  if (options.fps < 0) failOption("fps", "must be positive, or 0 for the clips' own key times");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);

@@ -157,7 +157,8 @@ struct BakeTimings {
   double error = 0.0;     // each clip's largest deformation error, recomputed in double where it could be
 };
 
-// Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, USAGE for a bad option.
+// Throws Error MUSCLES_MISMATCH when a muscle does not fit the skeleton, InvalidOption (core/error.h) naming
+// the BakeOptions field ("influences", "fps") for a bad option.
 BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, const BakeOptions& options,
                          BakeTimings* timings = nullptr);
 

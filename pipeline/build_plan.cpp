@@ -93,7 +93,16 @@ CharacterOutputs characterOutputs(const BuildManifest& manifest, const BuildChar
   out.report_junit = out.directory + "/report.junit.xml";
   out.report_html = out.directory + "/report.html";
   out.stamp = out.directory + "/.rigbake-inputs";
+  if (character.stats) out.stats = out.directory + "/stats.json";
+  if (character.packed) out.packed = out.directory + "/" + character.name + ".rbpk";
   return out;
+}
+
+std::vector<std::string> CharacterOutputs::files() const {
+  std::vector<std::string> files = {model, muscles, report_json, report_junit, report_html};
+  for (const std::string& optional : {stats, packed})
+    if (!optional.empty()) files.push_back(optional);
+  return files;
 }
 
 std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_command,
@@ -113,10 +122,13 @@ std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_
   for (int index : buildOrder(manifest)) {
     const BuildCharacter& c = manifest.characters[index];
     CharacterOutputs out = characterOutputs(manifest, c);
-    text += "build " + ninjaPath(out.model) + " " + ninjaPath(out.muscles) + " " + ninjaPath(out.report_json) + " " +
-            ninjaPath(out.report_junit) + " " + ninjaPath(out.report_html) + ": rigbake_character " + ninjaPath(c.input);
+    text += "build";
+    for (const std::string& file : out.files()) text += " " + ninjaPath(file);
+    text += ": rigbake_character " + ninjaPath(c.input);
     text += " " + ninjaPath(c.preset);
     if (!c.muscles.empty()) text += " " + ninjaPath(c.muscles);
+    for (const std::string* file : {&c.rom, &c.regions, &c.jiggle, &c.hits})
+      if (!file->empty()) text += " " + ninjaPath(*file);
     if (!c.muscles_from.empty()) {
       const BuildCharacter& source = manifest.characters[characterIndex(manifest, c.muscles_from)];
       text += " " + ninjaPath(characterOutputs(manifest, source).muscles) + " " + ninjaPath(source.input);

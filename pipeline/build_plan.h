@@ -24,6 +24,17 @@ struct BuildCharacter {
   bool helper_joints = false;
   ResponseMode response = ResponseMode::kAuto;
   int vrm = -1;              // "vrm": VRM version to write (0 or 1, as rigbake bake --vrm), -1 as the input is
+  // What `rigbake bake` does with --map, --regions, --jiggle, --hits, --vrm-springs-only, --fps,
+  // --fit-poses, --stats and --packed-out (docs/build.md).
+  std::string map;           // a naming map file (resolved) or a shipped map's name; empty: detected
+  std::string regions;       // region preset file (resolved); empty: the shipped "body"
+  std::string jiggle;        // jiggle preset file (resolved), or empty
+  std::string hits;          // hit file (resolved), or empty; only with a jiggle
+  bool vrm_springs_only = false;
+  double fps = 0.0;
+  int fit_poses = ResponseFitOptions{}.max_poses;
+  bool stats = false;        // also write OUT/NAME/stats.json
+  bool packed = false;       // also write OUT/NAME/NAME.rbpk
   std::string pointer;       // JSON pointer in the manifest, for messages
 };
 
@@ -38,6 +49,11 @@ struct BuildManifest {
   bool helper_joints = false;
   ResponseMode response = ResponseMode::kAuto;
   int vrm = -1;
+  std::string map, regions, jiggle, hits;  // the characters' defaults, as BuildCharacter's
+  bool vrm_springs_only = false;
+  double fps = 0.0;
+  int fit_poses = ResponseFitOptions{}.max_poses;
+  bool stats = false, packed = false;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;
 };
@@ -58,9 +74,13 @@ std::string buildGroup(const BuildManifest& manifest, int character);
 bool inShard(const BuildManifest& manifest, int character, int index, int count);
 
 // Output paths of one character: OUT/NAME/NAME.glb, muscles.json, report.json, report.junit.xml,
-// report.html, and the incremental-build stamp.
+// report.html, and the incremental-build stamp; with "stats" and "packed", stats.json and NAME.rbpk
+// (empty paths otherwise).
 struct CharacterOutputs {
   std::string directory, model, muscles, report_json, report_junit, report_html, stamp;
+  std::string stats, packed;
+  // Every output the character's run writes, the stamp aside, in a fixed order.
+  std::vector<std::string> files() const;
 };
 CharacterOutputs characterOutputs(const BuildManifest& manifest, const BuildCharacter& character);
 

@@ -292,6 +292,17 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
        "#/characters/0/gltf_weights"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}, {{"name", "a"}, {"input", "hero.glb"}}}}},
        "duplicate"},
+      // bake's options: hits and spring bones need a jiggle, and every preset must exist.
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"hits", "hits.json"}}}}},
+       "#/characters/0: gives hits but no jiggle"},
+      {{{"out", "out"}, {"vrm_springs_only", true}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
+       "#/characters/0: sets vrm_springs_only but gives no jiggle"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"jiggle", "no_such_jiggle"}}}}},
+       "#/characters/0/jiggle"},
+      {{{"out", "out"}, {"regions", "no_such_regions"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
+       "#/regions"},
+      {{{"out", "out"}, {"fit_poses", 0}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/fit_poses"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fps", -1}}}}}, "#/characters/0/fps"},
   };
   for (const Case& c : cases) {
     std::ofstream(dir / "m.json") << c.manifest.dump();
@@ -465,4 +476,63 @@ TEST_CASE("cli build: --emit-ninja '' is USAGE, not a build") {
   CHECK(run.exit_code == 1);
   CHECK(run.err.rfind("USAGE --emit-ninja:", 0) == 0);
   CHECK(!fs::exists(dir / "p/out"));
+}
+
+TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, fps, fit poses and spring bones, byte for byte as `rigbake bake` does") {
+  test::TempDir dir;
+  copyFile(test::sampleGlbPathForCli(), dir / "hero.glb");
+  REQUIRE(runCli("sample --vrm 1 -o " + ext::shellQuote(dir / "hero1.vrm")).exit_code == 0);
+  std::ofstream(dir / "hits.json") << R"({"hits": [{"clip": "ArmRaise", "time": 0.5, "direction": [0, 0, 1], "magnitude": 1.5, "joints": ["LeftBicep"], "why": "a punch"}]})";
+  const nlohmann::json manifest = {
+      {"out", "out"}, {"response", "keep"}, {"stats", true}, {"packed", true}, {"jiggle", "biceps"},
+      {"characters",
+       {{{"name", "hero"}, {"input", "hero.glb"}, {"influences", 4}, {"map", "gow"}, {"regions", "body"}, {"hits", "hits.json"},
+         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}},
+        {{"name", "springy"}, {"input", "hero1.vrm"}, {"vrm_springs_only", true}},
+        {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}}}}};
+  std::ofstream(dir / "manifest.json") << manifest.dump(2);
+  const test::CliResult build = runCli("build -j 2 " + ext::shellQuote(dir / "manifest.json"));
+  INFO(build.err);
+  // Spring bones need a VRM: that character fails, naming the manifest key, and the others are built.
+  CHECK(build.exit_code == 4);
+  CHECK(build.err.find("FAILED plain: MANIFEST_INVALID " + dir / "manifest.json" + "#/characters/2/vrm_springs_only: " +
+                       dir / "hero.glb" + " is not a VRM, so there is nowhere to put spring bones") != std::string::npos);
+  CHECK_FALSE(fs::exists(dir / "out/plain/plain.glb"));
+  const std::string bake_dir = dir / "bake";
+  fs::create_directories(bake_dir);
+  auto bake = [&](const std::string& input, const std::string& name, const std::string& flags) {
+    const test::CliResult run = runCli("bake " + ext::shellQuote(dir / input) + " -o " + ext::shellQuote(bake_dir + "/" + name + ".glb") +
+                                       " --jiggle biceps --stats " + ext::shellQuote(bake_dir + "/" + name + ".stats.json") +
+                                       " --packed-out " + ext::shellQuote(bake_dir + "/" + name + ".rbpk") + " --muscles-out " +
+                                       ext::shellQuote(bake_dir + "/" + name + ".muscles.json") + " " + flags);
+    INFO(run.err);
+    REQUIRE(run.exit_code == 0);
+  };
+  bake("hero.glb", "hero", "--influences 4 --map gow --regions body --hits " + ext::shellQuote(dir / "hits.json") +
+                               " --fps 20 --response fit --fit-poses 4");
+  bake("hero1.vrm", "springy", "--vrm-springs-only --response keep --influences 10");  // build's default: 10
+  for (const std::string name : {"hero", "springy"}) {
+    INFO(name);
+    const std::string built = dir / ("out/" + name + "/");
+    CHECK(slurp(built + name + ".glb") == slurp(bake_dir + "/" + name + ".glb"));
+    CHECK(slurp(built + "stats.json") == slurp(bake_dir + "/" + name + ".stats.json"));
+    CHECK(slurp(built + name + ".rbpk") == slurp(bake_dir + "/" + name + ".rbpk"));
+  }
+  // The muscle file names the character it was baked on, which build calls NAME.glb: hero's is hero.glb.
+  CHECK(slurp(dir / "out/hero/muscles.json") == slurp(bake_dir + "/hero.muscles.json"));
+  // The jiggles went where bake puts them: into the rig (hero), and as VRM spring bones (springy).
+  const nlohmann::json hero = test::glbJson(slurp(dir / "out/hero/hero.glb"));
+  CHECK(hero["extensions"]["RIGBAKE_muscle_rig"]["jiggles"].size() == 2);
+  CHECK(test::glbJson(slurp(dir / "out/springy/springy.glb"))["extensions"]["VRMC_springBone"]["springs"].size() == 2);
+  const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "out/hero/stats.json"));
+  CHECK(stats["influences"] == 4);
+  CHECK(stats["clips"] == 3);
+  // The validation read the file with the same map: its landmark check passed.
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "out/hero/report.json"));
+  for (const auto& check : report["checks"])
+    if (check["code"] == "LANDMARKS_RESOLVED") CHECK(check["status"] == "pass");
+  // A --map for all would not be in the stamps: build refuses it.
+  const test::CliResult map = runCli("build --map gow " + ext::shellQuote(dir / "manifest.json"));
+  CHECK(map.exit_code == 1);
+  CHECK(map.err.rfind("USAGE --map: ", 0) == 0);
 }

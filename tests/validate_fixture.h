@@ -3,8 +3,6 @@
 // a report page.
 #pragma once
 
-#include <tiny_gltf.h>
-
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,11 +10,10 @@
 #include <regex>
 
 #include "anatomy_fixture.h"
+#include "app/bake_job.h"
 #include "cli_support.h"
 #include "external_tools.h"
 #include "formats/baked_gltf.h"
-#include "formats/gltf_bake.h"
-#include "formats/gltf_write.h"
 #include "formats/muscle_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/checks.h"
@@ -55,22 +52,24 @@ inline std::string validateScratchDir() {
   return dir;
 }
 
-// Writes the baked GLB and its muscle JSON into `dir`; returns the GLB path.
+// Writes the baked GLB and its muscle JSON (as baked, as `bake --muscles-out` writes it) into `dir`;
+// returns the GLB path.
 inline std::string bakeToFiles(const std::string& path, int influences, const std::string& dir,
                                std::string* muscles_path) {
-  Resolved resolved = resolveShipped(path);
-  LoadedCharacter loaded = loadCharacter(path);
-  MuscleSet muscles = placeMuscles(loaded.character, resolved.landmarks, gowPreset(), Sides::kBoth);
-  BakeOptions options;
-  options.influences = influences;
-  // Both the rig extension and the skinned joints' channels: the checks read either.
-  options.motion = MuscleMotion::kBoth;
-  BakeResult bake = bakeCharacter(loaded.character, muscles, options);
+  static const app::Presets presets = app::loadPresets(presetsDir());
   const std::string stem = std::filesystem::path(path).stem().string() + "-" + std::to_string(influences);
   const std::string glb = dir + "/" + stem + ".glb";
   *muscles_path = dir + "/" + stem + "-muscles.json";
-  std::ofstream(glb, std::ios::binary) << serializeGltf(bakedModel(*loaded.document, loaded.character, bake), true);
-  std::ofstream(*muscles_path, std::ios::binary) << muscleJson(muscles, loaded.character.skeleton, "gow_biped");
+  app::BakeRequest request;
+  request.character.path = path;
+  request.output = glb;
+  request.regions = "";  // the checks measure the regions themselves, from the file
+  request.options.influences = influences;
+  // Both the rig extension and the skinned joints' channels: the checks read either.
+  request.options.motion = MuscleMotion::kBoth;
+  const app::BakeOutputs out = app::bakeJob(request, presets);
+  std::ofstream(glb, std::ios::binary) << out.model;
+  std::ofstream(*muscles_path, std::ios::binary) << out.muscles_json;
   return glb;
 }
 

@@ -1,25 +1,17 @@
-#include "cli/build_job.h"
+#include "app/build_job.h"
 
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "app/bake_job.h"
+#include "app/validate_job.h"
 #include "core/error.h"
-#include "anatomy/placement.h"
-#include "anatomy/retarget.h"
-#include "cli/common.h"
-#include "cli/validation_run.h"
 #include "formats/atomic_file.h"
 #include "formats/build_manifest.h"
-#include "formats/gltf_bake.h"
 #include "formats/json_text.h"
-#include "formats/muscle_json.h"
-#include "formats/preset_json.h"
-#include "formats/rom_json.h"
-#include "pipeline/bake.h"
-#include "pipeline/rom.h"
 
-namespace rigbake::cli {
+namespace rigbake::app {
 
 const char* jobStatusName(JobStatus status) {
   switch (status) {
@@ -28,15 +20,6 @@ const char* jobStatusName(JobStatus status) {
     case JobStatus::kFailed: return "failed";
   }
   return "failed";
-}
-
-SharedPresets loadSharedPresets(const std::string& presets_dir) {
-  SharedPresets shared;
-  shared.directory = presets_dir;
-  shared.maps = readNamingMaps(presets_dir + "/skeletons");
-  shared.rules = readLandmarkRules(presets_dir + "/landmarks.json");
-  shared.regions = presets_dir + "/regions/body.json";
-  return shared;
 }
 
 JobOutcome failedJob(const BuildCharacter& character, const std::string& error) {
@@ -49,22 +32,20 @@ JobOutcome failedJob(const BuildCharacter& character, const std::string& error) 
 
 namespace {
 
-struct Loaded {
-  LoadedCharacter character;
-  LandmarkSet landmarks;
-};
-
-// `vrm`: the character's "vrm" (-1 as the file is, 0 or 1 as bake --vrm).
-Loaded loadResolved(const std::string& path, const SharedPresets& presets, int vrm) {
-  LoadOptions options;
-  if (vrm >= 0) options.vrm = vrm == 1 ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
-  Loaded loaded;
-  loaded.character = loadCharacter(path, options);
-  LandmarkInputs inputs;
-  inputs.maps = &presets.maps;
-  inputs.rules = &presets.rules;
-  loaded.landmarks = resolveLandmarks(loaded.character.character, inputs);
-  return loaded;
+// The options `build` took over from `bake` later, named only when set, so that the stamps of
+// characters that use none of them stay valid.
+std::string bakeOnlyOptions(const BuildCharacter& character) {
+  std::string text;
+  if (!character.map.empty()) text += " map " + character.map;
+  if (!character.regions.empty()) text += " regions";
+  if (!character.jiggle.empty()) text += " jiggle";
+  if (!character.hits.empty()) text += " hits";
+  if (character.vrm_springs_only) text += " vrm_springs_only";
+  if (character.fps != 0.0) text += " fps " + std::to_string(character.fps);
+  if (character.fit_poses != ResponseFitOptions{}.max_poses) text += " fit_poses " + std::to_string(character.fit_poses);
+  if (character.stats) text += " stats";
+  if (character.packed) text += " packed";
+  return text;
 }
 
 // Everything that decides a character's outputs, hashed: its files' bytes, the preset, the muscle
@@ -73,6 +54,9 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
   std::vector<std::string> files = {character.input, character.preset};
   if (!character.muscles.empty()) files.push_back(character.muscles);
   if (!character.rom.empty()) files.push_back(character.rom);
+  for (const std::string* file : {&character.regions, &character.jiggle, &character.hits})
+    if (!file->empty()) files.push_back(*file);
+  if (character.map.find('/') != std::string::npos) files.push_back(character.map);  // a file, not a shipped name
   if (!character.muscles_from.empty()) {
     const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
     files.push_back(source.input);
@@ -84,20 +68,21 @@ std::string inputsHash(const BuildManifest& manifest, const BuildCharacter& char
                                 (character.rom.empty() ? std::string() : " rom") + " muscle_motion " +
                                 muscleMotionName(character.muscle_motion) + (character.helper_joints ? " helper_joints" : "") +
                                 (character.vrm >= 0 ? " vrm " + std::to_string(character.vrm) : std::string()) +
-                                " response " + responseModeName(character.response));
+                                " response " + responseModeName(character.response) + bakeOnlyOptions(character));
 }
 
 // Validates the written model against its muscle file and writes the three reports; returns how many
 // error-severity checks failed.
-int validateCharacter(const CharacterOutputs& out, const BuildCharacter& character, const SharedPresets& presets, int threads) {
+int validateCharacter(const CharacterOutputs& out, const BuildCharacter& character, const Presets& presets, int threads) {
   ValidationRequest request;
   request.threads = threads;  // the job's share of the cores, as its bake
   request.baked = out.model;
   request.muscles = out.muscles;
   request.preset = character.preset;
-  request.presets.presets_dir = presets.directory;
+  request.map = character.map;
   request.rom = character.rom;
-  const Report report = validateBakedFile(request);
+  if (!character.regions.empty()) request.regions = character.regions;
+  const Report report = validateJob(request, presets);
   writeReports(report, {out.report_json, out.report_junit, out.report_html}, threads);
   int failed = 0;
   for (const CheckResult& check : report.checks)
@@ -110,10 +95,49 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
 // killed between its renames, another build into the same folder, a hand edit) are never up to date.
 std::string outputsHash(const CharacterOutputs& out) {
   try {
-    return contentHash({out.model, out.muscles, out.report_json, out.report_junit, out.report_html}, "outputs");
+    return contentHash(out.files(), "outputs");
   } catch (const Error&) {
     return "";
   }
+}
+
+// The character's bake as `rigbake bake` would be asked for it.
+BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& character, const CharacterOutputs& out,
+                          int bake_threads) {
+  auto sourceOf = [&](const BuildCharacter& c) {
+    CharacterSource source;
+    source.path = c.input;
+    if (c.vrm >= 0) source.load.vrm = c.vrm == 1 ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
+    source.map = c.map;
+    return source;
+  };
+  BakeRequest request;
+  request.character = sourceOf(character);
+  request.output = out.model;
+  request.preset = character.preset;
+  request.muscles = character.muscles;
+  if (!character.muscles_from.empty()) {
+    const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
+    request.muscles = characterOutputs(manifest, source).muscles;
+    request.muscles_from = sourceOf(source);
+  }
+  request.muscles_character = character.name + ".glb";
+  request.rom = character.rom;  // measured on, not written (docs/rom.md)
+  if (!character.regions.empty()) request.regions = character.regions;
+  request.jiggle = character.jiggle;
+  request.hits = character.hits;
+  request.springs_only = character.vrm_springs_only;
+  request.packed = character.packed;
+  BakeOptions& options = request.options;
+  options.influences = character.influences;
+  options.gltf_weights = character.gltf_weights;
+  options.fps = character.fps;
+  options.threads = bake_threads;
+  options.response = character.response;
+  options.fit.max_poses = character.fit_poses;
+  options.motion = character.muscle_motion;
+  options.helper_joints = character.helper_joints;
+  return request;
 }
 
 void writeStamp(const CharacterOutputs& out, const std::string& hash, const JobOutcome& outcome) {
@@ -163,7 +187,7 @@ JobOutcome readJobOutcome(const BuildManifest& manifest, const BuildCharacter& c
   return outcomeFromStamp(character, path, readStamp(path));
 }
 
-JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const SharedPresets& presets,
+JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& character, const Presets& presets,
                            bool force, int bake_threads) {
   const CharacterOutputs out = characterOutputs(manifest, character);
   std::string hash;
@@ -183,43 +207,13 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     }
     createDirectories(out.directory);
     removeStamp(out);
-    MusclePreset preset = readMusclePreset(character.preset);
-    Loaded loaded = loadResolved(character.input, presets, character.vrm);
-    const Character& body = loaded.character.character;
-    MuscleSet muscles;
-    if (!character.muscles.empty()) {
-      muscles = readMuscleJson(character.muscles, body, loaded.landmarks, preset);
-    } else if (!character.muscles_from.empty()) {
-      const BuildCharacter& source = manifest.characters[characterIndex(manifest, character.muscles_from)];
-      const std::string source_muscles_path = characterOutputs(manifest, source).muscles;
-      Loaded from = loadResolved(source.input, presets, source.vrm);
-      MuscleSet source_muscles =
-          readMuscleJson(source_muscles_path, from.character.character, from.landmarks, preset);
-      muscles = retargetMuscles(source_muscles, from.character.character, from.landmarks, body, loaded.landmarks, preset,
-                                source_muscles_path);
-    } else {
-      muscles = placeMuscles(body, loaded.landmarks, preset, Sides::kBoth);
-    }
-    muscles.character = character.name + ".glb";
-    // "rom": measured on, not written (docs/rom.md).
-    if (!character.rom.empty())
-      appendMeasureOnlyClips(&loaded.character.character, buildRom(body, loaded.landmarks, readRomPreset(character.rom)));
-    BakeOptions options;
-    options.influences = character.influences;
-    options.gltf_weights = character.gltf_weights;
-    options.threads = bake_threads;
-    options.motion = character.muscle_motion;
-    options.helper_joints = character.helper_joints;
-    options.response = character.response;
-    const RegionPreset region_preset = readRegionPreset(presets.regions);
-    options.regions = resolveBodyRegions(body, loaded.landmarks, region_preset);
-    options.creases = resolveCreases(body, loaded.landmarks, region_preset.creases);
-    BakeResult bake = bakeCharacter(body, muscles, options);
-    const BakedFile file = writeBakedFile(*loaded.character.document, body, bake, true, {});
+    BakeOutputs baked = bakeJob(bakeRequestOf(manifest, character, out, bake_threads), presets);
     // The muscles as baked (carriers chosen, response fitted): what a retarget of this cast carries on.
     OutputBatch outputs;
-    outputs.add(out.muscles, muscleJson(bake.muscles, body.skeleton, preset.name));
-    outputs.add(out.model, file.bytes);
+    outputs.add(out.muscles, std::move(baked.muscles_json));
+    outputs.add(out.model, std::move(baked.model));
+    if (character.stats) outputs.add(out.stats, std::move(baked.stats_json));
+    if (character.packed) outputs.add(out.packed, std::move(baked.packed));
     outputs.commit();
     JobOutcome outcome;
     outcome.name = character.name;
@@ -227,7 +221,13 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     outcome.checks_failed = validateCharacter(out, character, presets, bake_threads);
     writeStamp(out, hash, outcome);
     return outcome;
-  } catch (const Error& error) {
+  } catch (const Error& thrown) {
+    // An option the bake refuses is named as the manifest spells it (bake's --vrm-springs-only is the
+    // manifest's vrm_springs_only).
+    const InvalidOption* option = dynamic_cast<const InvalidOption*>(&thrown);
+    const std::string key = option && option->field() == "springs_only" ? "vrm_springs_only" : option ? option->field() : "";
+    const Error error = option ? Error(errc::MANIFEST_INVALID, manifest.file + "#" + character.pointer + "/" + key, option->problem())
+                               : thrown;
     JobOutcome outcome = failedJob(character, error.what());
     try {
       createDirectories(out.directory);
@@ -241,4 +241,4 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
   }
 }
 
-}  // namespace rigbake::cli
+}  // namespace rigbake::app

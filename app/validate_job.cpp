@@ -1,4 +1,4 @@
-#include "cli/validation_run.h"
+#include "app/validate_job.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -13,10 +13,11 @@
 #include "formats/report_json.h"
 #include "formats/report_junit.h"
 #include "formats/preset_json.h"
+#include "formats/rom_json.h"
 #include "pipeline/baked_quality.h"
 #include "pipeline/rom.h"
 
-namespace rigbake::cli {
+namespace rigbake::app {
 namespace {
 
 std::string shellQuote(const std::string& text) {
@@ -75,37 +76,44 @@ ExternalValidation runKhronosValidator(const std::string& path) {
 
 }  // namespace
 
-Report validateBakedFile(const ValidationRequest& request) {
-  LoadedCharacter loaded;
+Report validateJob(const ValidationRequest& request, const Presets& presets) {
+  reportProgress(request.progress, "loading the character");
+  // A misspelt map fails before the file is read, as loadCharacter() does.
+  NamingMap forced;
+  if (!request.map.empty()) forced = namingMapOf(presets, request.map);
+  LoadedCharacter loaded = rigbake::loadCharacter(request.baked);
+  if (request.notes)
+    for (const std::string& note : loaded.notes) request.notes(note);
   LandmarkSet landmarks;
   bool landmarks_resolved = true;
   std::string landmark_problem;
-  reportProgress(request.progress, "loading the character");
   try {
-    ResolvedCharacter resolved = loadAndResolve(request.baked, request.presets);
-    loaded = std::move(resolved.loaded);
-    landmarks = std::move(resolved.landmarks);
+    LandmarkInputs inputs;
+    inputs.maps = &presets.maps;
+    inputs.rules = &presets.rules;
+    inputs.forced_map = request.map.empty() ? nullptr : &forced;
+    landmarks = resolveLandmarks(loaded.character, inputs);
   } catch (const Error& e) {
     // An unresolvable landmark is a finding about this character, not a reason to write no report.
     if (e.code() != "LANDMARK_UNRESOLVED") throw;
-    loaded = loadCharacter(request.baked);
     landmarks_resolved = false;
     landmark_problem = e.what();
   }
   // --rom: the range-of-motion clips are measured like the file's own (muscle ratios, deformation per
   // clip). Without landmarks there is no body frame to build them in; the landmark check says why.
   if (!request.rom.empty() && landmarks_resolved)
-    appendMeasureOnlyClips(&loaded.character, buildRom(loaded.character, landmarks, loadRomPreset(request.presets, request.rom)));
+    appendMeasureOnlyClips(&loaded.character, buildRom(loaded.character, landmarks, readRomPreset(presetFile(presets.directory, "rom", request.rom))));
   const Character& character = loaded.character;
   MuscleSet muscles;
   if (!request.muscles.empty()) {
-    MusclePreset preset = loadMusclePreset(request.presets, request.preset);
+    MusclePreset preset = readMusclePreset(presetFile(presets.directory, "muscles", request.preset));
     muscles = readMuscleJson(request.muscles, character, landmarks, preset);
   }
   const BakedFileData file = readBakedFileData(loaded);
 
   ValidationInputs inputs;
-  inputs.character_name = fileNameOf(request.baked);
+  const size_t slash = request.baked.find_last_of('/');
+  inputs.character_name = slash == std::string::npos ? request.baked : request.baked.substr(slash + 1);
   inputs.character = &character;
   inputs.landmarks = landmarks_resolved ? &landmarks : nullptr;
   inputs.landmark_problem = landmark_problem;
@@ -118,7 +126,7 @@ Report validateBakedFile(const ValidationRequest& request) {
     BakedQualityOptions quality_options;
     quality_options.pictures = request.pictures;
     quality_options.threads = request.threads;
-    quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(request.presets, "regions", request.regions)),
+    quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(presets.directory, "regions", request.regions)),
                                   file, quality_options);
     inputs.quality = &quality;
   }
@@ -171,4 +179,4 @@ void writeReports(const Report& report, const ReportPaths& paths, int threads) {
   }
 }
 
-}  // namespace rigbake::cli
+}  // namespace rigbake::app
