@@ -1,6 +1,7 @@
 #include "pipeline/joint_regions.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cmath>
 
@@ -27,13 +28,11 @@ int strongestJoint(const InfluenceSet& influences, int v) {
 }
 
 // Six times the signed volume of the triangles about `origin`.
-double coneVolume(const std::vector<std::array<int, 3>>& triangles, const std::vector<int>& listed,
-                  const std::vector<Eigen::Vector3d>& positions, const Eigen::Vector3d& origin) {
+double coneVolume(const std::vector<std::array<int, 3>>& triangles, const std::vector<Eigen::Vector3d>& positions,
+                  const Eigen::Vector3d& origin) {
   double sum = 0.0;
-  for (int t : listed) {
-    const auto& tri = triangles[static_cast<size_t>(t)];
+  for (const auto& tri : triangles)
     sum += (positions[tri[0]] - origin).dot((positions[tri[1]] - origin).cross(positions[tri[2]] - origin));
-  }
   return sum;
 }
 
@@ -61,32 +60,39 @@ void measureJointRegions(const Character& character, const std::vector<MeasuredP
       ++triangle_count[static_cast<size_t>(joint)];
     }
   }
-  // Per part, the vertices of those triangles: the only ones skinned.
-  std::vector<std::vector<int>> needed(parts.size());
-  for (size_t p = 0; p < parts.size(); ++p) {
-    const MeshPart& mesh = character.meshes[static_cast<size_t>(parts[p].mesh_part)];
-    std::vector<char> used(mesh.positions.size(), 0);
-    for (size_t j = 0; j < joint_count; ++j) {
-      if (triangle_count[j] < kMinJointRegionTriangles) continue;
-      for (int t : listed[p][j])
-        for (int corner : mesh.triangles[static_cast<size_t>(t)]) used[static_cast<size_t>(corner)] = 1;
-    }
-    for (size_t v = 0; v < used.size(); ++v)
-      if (used[v]) needed[p].push_back(static_cast<int>(v));
-  }
   std::vector<int> joints;
   for (size_t j = 0; j < joint_count; ++j)
     if (triangle_count[j] >= kMinJointRegionTriangles) joints.push_back(static_cast<int>(j));
   quality->joint_regions.clear();
   for (int j : joints) quality->joint_regions.push_back(skeleton.names[static_cast<size_t>(j)]);
+  // Per part, the vertices of those regions' triangles (the only ones skinned), their bind positions,
+  // and per region its triangles with corners numbered in that list.
+  std::vector<std::vector<int>> needed(parts.size());
+  std::vector<std::vector<Eigen::Vector3d>> needed_bind(parts.size());
+  std::vector<std::vector<std::vector<std::array<int, 3>>>> corners(parts.size(), std::vector<std::vector<std::array<int, 3>>>(joints.size()));
+  for (size_t p = 0; p < parts.size(); ++p) {
+    const MeshPart& mesh = character.meshes[static_cast<size_t>(parts[p].mesh_part)];
+    std::vector<int> slot(mesh.positions.size(), -1);
+    for (int j : joints)
+      for (int t : listed[p][static_cast<size_t>(j)])
+        for (int corner : mesh.triangles[static_cast<size_t>(t)]) slot[static_cast<size_t>(corner)] = 0;
+    for (size_t v = 0; v < slot.size(); ++v) {
+      if (slot[v] < 0) continue;
+      slot[v] = static_cast<int>(needed[p].size());
+      needed[p].push_back(static_cast<int>(v));
+      needed_bind[p].push_back(mesh.positions[v]);
+    }
+    for (size_t r = 0; r < joints.size(); ++r)
+      for (int t : listed[p][static_cast<size_t>(joints[r])]) {
+        const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+        corners[p][r].push_back({slot[static_cast<size_t>(tri[0])], slot[static_cast<size_t>(tri[1])], slot[static_cast<size_t>(tri[2])]});
+      }
+  }
   // Bind volumes about each joint's bind origin.
   std::vector<double> bind(joints.size(), 0.0);
   for (size_t r = 0; r < joints.size(); ++r) {
     const Eigen::Vector3d origin = skeleton.bind_world[joints[r]].translation();
-    for (size_t p = 0; p < parts.size(); ++p) {
-      const MeshPart& mesh = character.meshes[static_cast<size_t>(parts[p].mesh_part)];
-      bind[r] += coneVolume(mesh.triangles, listed[p][static_cast<size_t>(joints[r])], mesh.positions, origin);
-    }
+    for (size_t p = 0; p < parts.size(); ++p) bind[r] += coneVolume(corners[p][r], needed_bind[p], origin);
   }
   for (size_t c = 0; c < clips.size(); ++c) {
     const std::vector<SkinFrame>& frames = *clips[c].frames;
@@ -97,18 +103,14 @@ void measureJointRegions(const Character& character, const std::vector<MeasuredP
       for (size_t p = 0; p < parts.size(); ++p) {
         const MeshPart& mesh = character.meshes[static_cast<size_t>(parts[p].mesh_part)];
         if (needed[p].empty()) continue;
-        // Only the regions' vertices are posed; the rest of each array keeps the bind pose, unread.
-        std::vector<Eigen::Vector3d> plain = mesh.positions, rig = mesh.positions, listed_posed;
-        skinLinearBlend(mesh.positions, parts[p].input, frames[t], needed[p], &listed_posed);
-        for (size_t i = 0; i < needed[p].size(); ++i) plain[static_cast<size_t>(needed[p][i])] = listed_posed[i];
-        skinLinearBlend(mesh.positions, parts[p].rig, frames[t], needed[p], &listed_posed);
-        for (size_t i = 0; i < needed[p].size(); ++i) rig[static_cast<size_t>(needed[p][i])] = listed_posed[i];
+        std::vector<Eigen::Vector3d> plain, rig;
+        skinLinearBlend(mesh.positions, parts[p].input, frames[t], needed[p], &plain);
+        skinLinearBlend(mesh.positions, parts[p].rig, frames[t], needed[p], &rig);
         for (size_t r = 0; r < joints.size(); ++r) {
-          const std::vector<int>& triangles = listed[p][static_cast<size_t>(joints[r])];
-          if (triangles.empty()) continue;
+          if (corners[p][r].empty()) continue;
           const Eigen::Vector3d origin = frames[t][static_cast<size_t>(joints[r])] * skeleton.bind_world[joints[r]].translation();
-          volume[r][0] += coneVolume(mesh.triangles, triangles, plain, origin);
-          volume[r][1] += coneVolume(mesh.triangles, triangles, rig, origin);
+          volume[r][0] += coneVolume(corners[p][r], plain, origin);
+          volume[r][1] += coneVolume(corners[p][r], rig, origin);
         }
       }
       for (size_t r = 0; r < joints.size(); ++r)
