@@ -1,11 +1,11 @@
-// `rigbake sample`: writes the procedural mannequin (anatomy/sample_character.h) as GLB, glTF or VRM.
+// `rigbake sample`: writes the procedural mannequin (sample/sample_character.h) as GLB, glTF or VRM.
 #include <iostream>
 #include <memory>
 
-#include "anatomy/sample_character.h"
 #include "cli/common.h"
 #include "cli/commands.h"
 #include "formats/sample_gltf.h"
+#include "sample/sample_character.h"
 
 namespace rigbake::cli {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "anatomy/sample_character.h"
+#include "sample/sample_character.h"
 
 namespace tinygltf {
 class Model;

@@ -72,9 +72,9 @@ inline const MusclePreset& gowPreset() {
 
 #include <cstdio>
 
-#include "anatomy/sample_character.h"
 #include "formats/gltf_write.h"
 #include "formats/sample_gltf.h"
+#include "sample/sample_character.h"
 
 namespace rigbake::test {
 

@@ -7,11 +7,11 @@
 #include <set>
 
 #include "core/error.h"
-#include "anatomy/sample_character.h"
 #include "external_tools.h"
 #include "formats/atomic_file.h"
 #include "formats/gltf_document.h"
 #include "formats/sample_gltf.h"
+#include "sample/sample_character.h"
 #include "test_support.h"
 #include "glb_support.h"
 

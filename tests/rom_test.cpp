@@ -9,7 +9,6 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "anatomy/sample_character.h"
 #include "anatomy_fixture.h"
 #include "external_tools.h"
 #include "formats/gltf_bake.h"
@@ -19,6 +18,7 @@
 #include "glb_support.h"
 #include "pipeline/bake.h"
 #include "pipeline/pose.h"
+#include "sample/sample_character.h"
 
 using namespace rigbake;
 

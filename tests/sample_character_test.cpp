@@ -1,4 +1,4 @@
-#include "anatomy/sample_character.h"
+#include "sample/sample_character.h"
 
 #include <tiny_gltf.h>
 

@@ -1,4 +1,4 @@
-// The procedural mannequin (anatomy/sample_character.h).
+// The procedural mannequin (sample/sample_character.h).
 //
 // Skeleton: the animation skeleton of "Joint-Based Skin Deformation in God of War Ragnarök" (Tenghao
 // Wang, GDC 2023): JOHead1 at C1, JONeck1 at C7, JOBack3 at T8, JOBack2 at T12, JOBack1 at L5,
@@ -15,7 +15,7 @@
 // each end, superellipse end profile), so the whole body is a union of closed surfaces. Skin weights
 // are inverse-distance weights to the bone segments (distance divided by the segment's flesh radius,
 // to the 4th power), limited to the bones near each body segment, 4 largest kept.
-#include "anatomy/sample_character.h"
+#include "sample/sample_character.h"
 
 #include <algorithm>
 #include <cassert>
