@@ -204,9 +204,12 @@ void requireLandmarks(const LandmarkSet& set, const std::vector<std::string>& na
     if (match && match->tried.count(name)) {
       for (const std::string& n : match->tried.at(name)) tried += (tried.empty() ? "" : ", ") + n;
     }
-    fail(errc::LANDMARK_UNRESOLVED, file,
-         "landmark '" + name + "' matches no joint (map " + map_name + " tried: " + (tried.empty() ? "nothing" : tried) +
-             "; the structural fallback found none) and cannot be derived; pass --map with a JSON naming map");
+    // A naming map that spells the joint is the fix; the caller knows how its user gives one.
+    throw FixableByOption(errc::LANDMARK_UNRESOLVED, file,
+                          "landmark '" + name + "' matches no joint (map " + map_name + " tried: " +
+                              (tried.empty() ? "nothing" : tried) +
+                              "; the structural fallback found none) and cannot be derived; give a JSON naming map",
+                          "map");
   }
 }
 

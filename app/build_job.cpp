@@ -223,11 +223,15 @@ JobOutcome runCharacterJob(const BuildManifest& manifest, const BuildCharacter& 
     return outcome;
   } catch (const Error& thrown) {
     // An option the bake refuses is named as the manifest spells it (bake's --vrm-springs-only is the
-    // manifest's vrm_springs_only).
+    // manifest's vrm_springs_only), and an error that an option would fix (a naming map) says which key
+    // gives it.
     const InvalidOption* option = dynamic_cast<const InvalidOption*>(&thrown);
+    const FixableByOption* fixable = dynamic_cast<const FixableByOption*>(&thrown);
     const std::string key = option && option->field() == "springs_only" ? "vrm_springs_only" : option ? option->field() : "";
-    const Error error = option ? Error(errc::MANIFEST_INVALID, manifest.file + "#" + character.pointer + "/" + key, option->problem())
-                               : thrown;
+    const Error error = option    ? Error(errc::MANIFEST_INVALID, manifest.file + "#" + character.pointer + "/" + key, option->problem())
+                        : fixable ? Error(fixable->errorCode(), fixable->where(),
+                                          fixable->message() + " (as " + manifest.file + "#" + character.pointer + "/" + fixable->field() + ")")
+                                  : thrown;
     JobOutcome outcome = failedJob(character, error.what());
     try {
       createDirectories(out.directory);

@@ -170,9 +170,10 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
 }
 
 // Where each field of app::BakeRequest and BakeOptions comes from on the command line.
-// (The fields app::bakeJob and bakeCharacter name in an InvalidOption.)
-const std::vector<FlagName> kBakeFlags = {
-    {"influences", "--influences"}, {"fps", "--fps"}, {"hits", "--hits"}, {"springs_only", "--vrm-springs-only"}};
+// (The fields app::bakeJob and bakeCharacter name in an InvalidOption, and "map", which a landmark that
+// does not resolve asks for in a FixableByOption.)
+const std::vector<FlagName> kBakeFlags = {{"influences", "--influences"}, {"fps", "--fps"}, {"hits", "--hits"},
+                                          {"springs_only", "--vrm-springs-only"}, {"map", "--map"}};
 
 app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const ProgressReport& progress) {
   app::BakeRequest request;

@@ -27,8 +27,8 @@ struct RetargetOptions {
 
 int run(const RetargetOptions& options) {
   checkOutputOptions({{"-o", options.output, true, true}}, options.json);
-  PresetOptions src_presets{options.presets_dir, options.map_from};
-  PresetOptions dst_presets{options.presets_dir, options.map_to};
+  PresetOptions src_presets{options.presets_dir, options.map_from, "--map-from"};
+  PresetOptions dst_presets{options.presets_dir, options.map_to, "--map-to"};
   MusclePreset preset = loadMusclePreset(src_presets, options.preset);
   ResolvedCharacter src = loadAndResolve(options.from, src_presets);
   // Read against the source: a file naming joints SRC lacks fails here with MUSCLES_MISMATCH.

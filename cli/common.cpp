@@ -61,7 +61,8 @@ ResolvedCharacter loadAndResolve(const std::string& path, const PresetOptions& o
   source.path = path;
   source.load = load;
   source.map = options.map;
-  return app::loadCharacter(source, app::loadPresets(presetsDirectory(options)), printNotesOf(path));
+  return withFlagNames({{"map", options.map_flag}},
+                       [&] { return app::loadCharacter(source, app::loadPresets(presetsDirectory(options)), printNotesOf(path)); });
 }
 
 void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_on_stdout) {

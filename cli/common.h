@@ -19,6 +19,7 @@ namespace rigbake::cli {
 struct PresetOptions {
   std::string presets_dir;  // --presets; default: $RIGBAKE_PRESETS or the source tree's presets/
   std::string map;          // --map: a naming map file, or the name of a shipped map
+  const char* map_flag = "--map";  // how this command spells the flag that gives `map` (retarget: --map-from, --map-to)
 };
 
 void addPresetOptions(CLI::App* command, PresetOptions* options);
@@ -63,7 +64,8 @@ struct FlagName {
   const char* flag;   // e.g. "--influences"
 };
 
-// Runs `call`; an InvalidOption it throws becomes the USAGE error of the field's flag, in the same words.
+// Runs `call`; an InvalidOption it throws becomes the USAGE error of the field's flag, in the same words,
+// and an error that an option would fix (FixableByOption) keeps its code and gets "(pass FLAG)".
 template <typename Call>
 auto withFlagNames(const std::vector<FlagName>& flags, Call&& call) -> decltype(call()) {
   try {
@@ -71,6 +73,11 @@ auto withFlagNames(const std::vector<FlagName>& flags, Call&& call) -> decltype(
   } catch (const InvalidOption& option) {
     for (const FlagName& name : flags)
       if (option.field() == name.field) fail(errc::USAGE, name.flag, option.problem());
+    throw;
+  } catch (const FixableByOption& fixable) {
+    for (const FlagName& name : flags)
+      if (fixable.field() == name.field)
+        fail(fixable.errorCode(), fixable.where(), fixable.message() + " (pass " + name.flag + ")");
     throw;
   }
 }

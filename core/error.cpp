@@ -1,5 +1,7 @@
 #include "core/error.h"
 
+#include <utility>
+
 namespace rigbake {
 
 namespace {
@@ -62,5 +64,8 @@ InvalidOption::InvalidOption(const std::string& field, const std::string& proble
     : Error(errc::USAGE, field, problem), field_(field), problem_(problem) {}
 
 void failOption(const std::string& field, const std::string& problem) { throw InvalidOption(field, problem); }
+
+FixableByOption::FixableByOption(const ErrorCode& code, std::string where, const std::string& message, std::string field)
+    : Error(code, std::move(where), message), field_(std::move(field)), message_(message) {}
 
 }  // namespace rigbake

@@ -114,6 +114,22 @@ class InvalidOption : public Error {
 
 [[noreturn]] void failOption(const std::string& field, const std::string& problem);
 
+// An error that one more option would fix, naming that option by its field, as InvalidOption names a
+// bad one: anatomy/ asks for a naming map as "map" (the `map` of app::CharacterSource and
+// app::ValidationRequest, the build manifest's "map"). The message says in words what to give ("give a
+// JSON naming map") and names no flag; the caller that prints it adds how its user gives it (cli/: the
+// flag; build: the manifest key). Uncaught, it is the plain error of its code.
+class FixableByOption : public Error {
+ public:
+  FixableByOption(const ErrorCode& code, std::string where, const std::string& message, std::string field);
+  const std::string& field() const { return field_; }
+  const std::string& message() const { return message_; }  // without the code and where
+
+ private:
+  std::string field_;
+  std::string message_;
+};
+
 // The length of the well-formed UTF-8 sequence (RFC 3629: no overlong forms, surrogates or code points
 // past U+10FFFF) that starts at text[i], or 0. Text rigbake writes passes through it where the input
 // may have put bytes that are not UTF-8 (error lines, JUnit XML).

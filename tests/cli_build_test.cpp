@@ -108,6 +108,26 @@ TEST_CASE("cli build: a character whose file puts invalid UTF-8 into its error f
   CHECK(nlohmann::json::parse(run.out).size() == 1);
 }
 
+TEST_CASE("cli build: a landmark no joint matches asks for a naming map by the manifest's key, not bake's flag") {
+  test::TempDir dir;
+  fs::create_directories(dir / "p");
+  copyFile(test::sampleGlbPathForCli(), dir / "p/hero.glb");
+  // The Mixamo map finds none of the sample's JO* joints: the character fails before its bake.
+  const nlohmann::json manifest = {{"preset", "gow_biped"}, {"influences", 4}, {"out", "out"},
+                                   {"characters", {{{"name", "hero"}, {"input", "hero.glb"}, {"map", "mixamo"}}}}};
+  const std::string path = dir / "p/manifest.json";
+  std::ofstream(path) << manifest.dump(2);
+  test::CliResult run = runCli("build " + ext::shellQuote(path));
+  INFO(run.err);
+  CHECK(run.exit_code == 4);
+  const nlohmann::json summary = summaryOf(dir / "p/out");
+  CHECK(statusOf(summary, "hero") == "failed");
+  const std::string error = summary["characters"][0]["error"];
+  CHECK(error.rfind("LANDMARK_UNRESOLVED ", 0) == 0);
+  CHECK(error.find("give a JSON naming map (as " + path + "#/characters/0/map)") != std::string::npos);
+  CHECK(error.find("--map") == std::string::npos);
+}
+
 TEST_CASE("cli build: every character gets its outputs and a summary, a broken one fails the run, not the others") {
   test::TempDir dir;
   // A truncated GLB: the loader must reject it, and the build must go on with the others.

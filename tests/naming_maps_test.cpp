@@ -88,4 +88,32 @@ TEST_CASE("naming maps: a user map given with --map overrides detection") {
   CHECK(cli.exit_code == 3);  // the sample's JO* names are not the studio's
   CHECK(cli.err.rfind("LANDMARK_UNRESOLVED ", 0) == 0);
   CHECK(cli.err.find("map studio tried: root_hip") != std::string::npos);
+  CHECK(cli.err.find("cannot be derived; give a JSON naming map (pass --map)\n") != std::string::npos);
+}
+
+TEST_CASE("naming maps: a landmark no joint matches asks for a naming map by field, and each caller names its own option") {
+  // anatomy/ names no flag: the error says what to give and which field of the request gives it.
+  const NamingMap mixamo = readNamingMap(test::presetsDir() + "/skeletons/mixamo.json");
+  try {
+    test::resolveShipped(test::sampleGlbPath(), &mixamo);
+    FAIL("the sample's JO* names resolved with the Mixamo map");
+  } catch (const FixableByOption& error) {
+    CHECK(error.code() == "LANDMARK_UNRESOLVED");
+    CHECK(error.field() == "map");
+    CHECK(error.message().find("cannot be derived; give a JSON naming map") != std::string::npos);
+    CHECK(std::string(error.what()).find("--") == std::string::npos);
+  }
+  // The command line names its flag: --map, or retarget's --map-from / --map-to for the character it
+  // resolves with that map.
+  test::TempDir dir;
+  const std::string glb = test::sampleGlbPathForCli();
+  const test::CliResult bake = test::runCli("bake " + glb + " --map mixamo -o " + (dir / "b.glb"));
+  CHECK(bake.exit_code == 3);
+  CHECK(bake.err.find("give a JSON naming map (pass --map)\n") != std::string::npos);
+  const test::CliResult from =
+      test::runCli("retarget " + (dir / "m.json") + " --from " + glb + " --to " + glb + " --map-from mixamo -o " + (dir / "r.json"));
+  CHECK(from.exit_code == 3);
+  CHECK(from.err.find("give a JSON naming map (pass --map-from)\n") != std::string::npos);
+  CHECK(!std::filesystem::exists(dir / "b.glb"));
+  CHECK(!std::filesystem::exists(dir / "r.json"));
 }
