@@ -134,7 +134,7 @@ Report validateJob(const ValidationRequest& request, const Presets& presets) {
     reportProgress(request.progress, "running the Khronos glTF-Validator");
     inputs.khronos = runKhronosValidator(request.baked);
   } else {
-    inputs.khronos.skip_reason = "not requested (pass --khronos)";
+    inputs.khronos.skip_reason = kKhronosNotRequested;
   }
   reportProgress(request.progress, "checking");
   return validateBakedCharacter(inputs, request.config);

@@ -12,6 +12,10 @@
 
 namespace rigbake::app {
 
+// The Khronos check's skip reason when the request did not ask for it. It names no flag: the command
+// line says how to ask (`rigbake validate` prints "pass --khronos" beside it); build never runs it.
+inline constexpr const char* kKhronosNotRequested = "not requested";
+
 struct ValidationRequest {
   std::string baked;          // the baked .glb / .gltf / .vrm
   std::string muscles;        // its muscle JSON, or empty to skip the muscle checks
