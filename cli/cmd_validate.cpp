@@ -64,8 +64,12 @@ int run(const ValidateCommandOptions& options) {
     const std::string where = check.location.empty() ? character_name : check.location;
     if (check.status == CheckStatus::kSkipped) ++skipped;
     // The reports say what happened; the flag that changes it is the command line's to name.
-    if (check.status == CheckStatus::kSkipped && check.code == "KHRONOS_VALIDATOR" && check.message == app::kKhronosNotRequested)
-      std::cerr << check.code << " " << where << ": skipped: " << check.message << " (pass --khronos)\n";
+    if (check.status == CheckStatus::kSkipped) {
+      const char* flag = check.code == "KHRONOS_VALIDATOR" && check.message == app::kKhronosNotRequested ? "--khronos"
+                         : check.message == kNoMuscleFile                                               ? "--muscles"
+                                                                                                        : nullptr;
+      if (flag) std::cerr << check.code << " " << where << ": skipped: " << check.message << " (pass " << flag << ")\n";
+    }
     if (check.status != CheckStatus::kFail) continue;
     ++(check.severity == Severity::kError ? failed_errors : failed_warnings);
     // Landmarks that match no joint are what a naming map is for.

@@ -680,7 +680,7 @@ std::string reportHtml(const Report& report, int threads) {
           "[compression, stretch] band; a red dot is a sample outside it, where the muscle stops following its "
           "attach joints. The dashed grey line is rest length.</p>\n";
   if (report.ratios.empty()) {
-    html += "<p class=\"note\">No muscle file was given (--muscles), so muscle ratios were not evaluated.</p>\n";
+    html += "<p class=\"note\">No muscle file was given, so muscle ratios were not evaluated.</p>\n";
   } else {
     html += groupLegend(groups, true) + "<div class=\"grid\">\n";
     for (const ClipRatios& clip : report.ratios) html += ratioChart(clip);

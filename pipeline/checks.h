@@ -24,12 +24,17 @@
 
 namespace rigbake {
 
+// The reason the muscle checks give when ValidationInputs::muscles is null, in the report's own words;
+// `rigbake validate` prints the flag that gives one beside it on stderr (cli/ knows the flag, the
+// report does not: build's reports come from a manifest).
+inline constexpr const char* kNoMuscleFile = "no muscle file given";
+
 struct ValidationInputs {
   std::string character_name;
   const Character* character = nullptr;
   const LandmarkSet* landmarks = nullptr;  // nullptr when they did not resolve
   std::string landmark_problem;            // the resolver's message when they did not
-  const MuscleSet* muscles = nullptr;      // nullptr without --muscles
+  const MuscleSet* muscles = nullptr;      // nullptr: no muscle file given (the muscle checks skip, kNoMuscleFile)
   const BakedFileData* file = nullptr;
   const BakedQuality* quality = nullptr;  // nullptr: not measured (the checks say why)
   ExternalValidation khronos;

@@ -87,7 +87,7 @@ CheckResult checkLandmarksResolved(const ValidationInputs& inputs, const Validat
 
 CheckResult checkLocatorSymmetry(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck(checkAt<checkIndex("LOCATOR_SYMMETRY")>(), config);
-  if (!inputs.muscles) return skippedCheck(result, "no muscle file given (--muscles)");
+  if (!inputs.muscles) return skippedCheck(result, kNoMuscleFile);
   if (!inputs.landmarks) return skippedCheck(result, "landmarks did not resolve, so there is no sagittal plane");
   const BodyFrame& body = inputs.landmarks->body;
   const double height = bodyHeightOf(inputs);
@@ -114,7 +114,7 @@ CheckResult checkLocatorSymmetry(const ValidationInputs& inputs, const Validatio
 
 CheckResult checkLocatorNearSurface(const ValidationInputs& inputs, const ValidationConfig& config) {
   CheckResult result = startCheck(checkAt<checkIndex("LOCATOR_NEAR_SURFACE")>(), config);
-  if (!inputs.muscles) return skippedCheck(result, "no muscle file given (--muscles)");
+  if (!inputs.muscles) return skippedCheck(result, kNoMuscleFile);
   if (!inputs.landmarks) return skippedCheck(result, "landmarks did not resolve, so the body height is unknown");
   const double height = bodyHeightOf(inputs);
   // Each locator against every body triangle: the locators on the threads, then read in order.
@@ -142,7 +142,7 @@ CheckResult checkLocatorNearSurface(const ValidationInputs& inputs, const Valida
 CheckResult checkMuscleRatioInRange(const ValidationInputs& inputs, const std::vector<ClipRatios>& ratios,
                                     const ValidationConfig& config) {
   CheckResult result = startCheck(checkAt<checkIndex("MUSCLE_RATIO_IN_RANGE")>(), config);
-  if (!inputs.muscles) return skippedCheck(result, "no muscle file given (--muscles)");
+  if (!inputs.muscles) return skippedCheck(result, kNoMuscleFile);
   if (inputs.muscles->parts.empty()) return skippedCheck(result, "the muscle file has no muscles");
   CheckMeasurement measurement(&result);
   int samples = 0;
@@ -175,8 +175,7 @@ CheckResult checkJiggleWithinClamp(const ValidationInputs& inputs, const std::ve
   CheckResult result = startCheck(checkAt<checkIndex("JIGGLE_WITHIN_CLAMP")>(), config);
   if (clips.empty() && refused.empty())
     return skippedCheck(result, inputs.file->rig.jiggles.empty()
-                               ? "the file has no jiggle (bake --jiggle): none baked into its clips, none in " +
-                                     std::string("RIGBAKE_muscle_rig")
+                               ? std::string("the file has no jiggle: none baked into its clips, none in RIGBAKE_muscle_rig")
                                : "the file's clips have no motion for its runtime jiggles to follow");
   CheckMeasurement measurement(&result);
   // A jiggle the runtime refuses has nothing bounding its angle: it fails at the largest angle there is.

@@ -122,6 +122,13 @@ TEST_CASE("cli validate: without --muscles the muscle checks are skipped and the
   CHECK(checkIn(report, "LOCATOR_NEAR_SURFACE")["status"] == "skipped");
   CHECK(checkIn(report, "PACKED_DEFORMATION_ERROR")["status"] == "pass");
   CHECK(checkIn(report, "GLTF_STRUCTURE")["status"] == "pass");
+  // The report says what is missing in its own words; the command line adds the flag that gives it.
+  CHECK(checkIn(report, "MUSCLE_RATIO_IN_RANGE")["message"] == "no muscle file given");
+  for (const char* code : {"LOCATOR_SYMMETRY", "LOCATOR_NEAR_SURFACE", "MUSCLE_RATIO_IN_RANGE"})
+    CHECK(run.err.find(std::string(code) + " baked.glb: skipped: no muscle file given (pass --muscles)\n") != std::string::npos);
+  const std::string html = slurp(out / "r/report.html");
+  CHECK(html.find("No muscle file was given, so muscle ratios were not evaluated.") != std::string::npos);
+  CHECK(html.find("--muscles") == std::string::npos);
 }
 
 TEST_CASE("cli validate: --config overrides a threshold, a malformed config is exit 3 and writes nothing") {
