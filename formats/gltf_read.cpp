@@ -498,11 +498,13 @@ LoadedCharacter characterOf(std::shared_ptr<GltfDocument> document, const std::s
 std::vector<std::string> applyVrmTarget(tinygltf::Model* model, VrmTarget target, const std::string& path) {
   if (target == VrmTarget::kAsIs) return {};
   const bool vrm0 = model->extensions.count("VRM") > 0, vrm1 = model->extensions.count("VRMC_vrm") > 0;
-  const char* flag = target == VrmTarget::kVrm1 ? "--vrm 1" : "--vrm 0";
+  // The target in words, not as a flag: bake's --vrm and build's manifest key "vrm" both ask for it.
+  const char* version = target == VrmTarget::kVrm1 ? "VRM 1.0" : "VRM 0.x";
   if (!vrm0 && !vrm1)
-    fail(errc::VRM_CONVERSION_UNSUPPORTED, path, std::string("is not a VRM (no VRM or VRMC_vrm extension), so ") + flag + " has no avatar to convert");
+    fail(errc::VRM_CONVERSION_UNSUPPORTED, path,
+         std::string("is not a VRM (no VRM or VRMC_vrm extension), so there is no avatar to write as ") + version);
   if (target == VrmTarget::kVrm0 && vrm1)
-    fail(errc::VRM_CONVERSION_UNSUPPORTED, path, "is a VRM 1.0; rigbake converts VRM 0.x to 1.0 (--vrm 1), not back to 0.x");
+    fail(errc::VRM_CONVERSION_UNSUPPORTED, path, "is a VRM 1.0 asked to be VRM 0.x; rigbake converts VRM 0.x to 1.0, not back");
   if (target == VrmTarget::kVrm1 && vrm0 && !vrm1) return convertVrm0ToVrm1(model, path);
   return {};
 }
