@@ -118,7 +118,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   if (in.has("response")) manifest.response = responseOf(in.at("response"));
   auto vrmOf = [](const JsonReader& value) {
     const int version = value.asInt();
-    if (version != 0 && version != 1) value.fail("must be 0 or 1 (the VRM version to write, as rigbake bake --vrm)");
+    if (version != 0 && version != 1) value.fail("must be 0 or 1 (the VRM version to write)");
     return version;
   };
   if (in.has("vrm")) manifest.vrm = vrmOf(in.at("vrm"));

@@ -48,12 +48,12 @@ const std::vector<HonouredExtension>& honouredExtensions() {
        "Lights and the nodes' references to them are written as they were."},
       {"KHR_xmp_json_ld", ExtensionHandling::kPassedThrough, "Metadata is written as it was."},
       {"VRM", ExtensionHandling::kRead,
-       "VRM 0.x: humanoid.humanBones map landmarks (presets/skeletons/vrm_humanoid.json); bake --jiggle adds "
+       "VRM 0.x: humanoid.humanBones map landmarks (presets/skeletons/vrm_humanoid.json); a bake with jiggles adds "
        "secondaryAnimation boneGroups; everything else is written as it was."},
       {"VRMC_vrm", ExtensionHandling::kRead,
        "VRM 1.0: humanoid.humanBones map landmarks; everything else is written as it was."},
       {"VRMC_springBone", ExtensionHandling::kRead,
-       "VRM 1.0 spring bones: bake --jiggle writes the jiggles as springs; a file's own springs are kept."},
+       "VRM 1.0 spring bones: a bake with jiggles writes them as springs; a file's own springs are kept."},
       {"VRMC_materials_mtoon", ExtensionHandling::kPassedThrough, "Materials are written as they were."},
   };
   return kExtensions;

@@ -134,7 +134,7 @@ RomPreset parseRomPreset(const nlohmann::json& json, const std::string& file) {
     spec.pointer = item.pointer();
     spec.name = item.at("name").asString();
     if (spec.name.empty() || spec.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") != std::string::npos)
-      item.at("name").fail("must be lowercase letters, digits and '_' (it names the clip on --clips)");
+      item.at("name").fail("must be lowercase letters, digits and '_' (it is the name a clip is chosen by)");
     if (!names.insert(spec.name).second) item.at("name").fail("duplicate clip name '" + spec.name + "'");
     if (item.has("why")) item.at("why").asString();
     if (item.has("duration_s")) spec.duration_s = numberIn(item.at("duration_s"), 0.01, 3600.0);
