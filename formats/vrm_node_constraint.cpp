@@ -34,7 +34,8 @@ int constraintSource(const tinygltf::Value& extension) {
 
 void addVrmAimConstraints(tinygltf::Model* model, const std::vector<VrmAimConstraint>& constraints) {
   if (model->extensions.count("VRMC_vrm") == 0)
-    fail(errc::USAGE, "--helper-joints", "node constraints can only be exported into a VRM 1.0 model");
+    // addHelperAimConstraints() only asks for them in a VRM 1.0, so this is a caller's bug, not a user's input.
+    fail(errc::INTERNAL, "/extensions", "node constraints can only be exported into a VRM 1.0 model");
   if (constraints.empty()) return;
   const int node_count = static_cast<int>(model->nodes.size());
   std::vector<int> parent(node_count, -1);

@@ -66,7 +66,8 @@ std::vector<VrmSpring> vrmSpringsForSkeleton(const Skeleton& skeleton, const std
 void addVrmSpringBones(tinygltf::Model* model, const std::vector<VrmSpring>& springs) {
   const bool vrm1 = model->extensions.count("VRMC_vrm") > 0;
   const bool vrm0 = model->extensions.count("VRM") > 0;
-  if (!vrm1 && !vrm0) fail(errc::USAGE, "--jiggle", "spring bones can only be exported into a VRM (0.x or 1.0) model");
+  // writeBakedFile() only asks for springs of a VRM, so this is a caller's bug, not a user's input.
+  if (!vrm1 && !vrm0) fail(errc::INTERNAL, "/extensions", "spring bones can only be exported into a VRM (0.x or 1.0) model");
   for (const VrmSpring& spring : springs) {
     if (spring.head_node < 0 || spring.head_node >= static_cast<int>(model->nodes.size()))
       fail(errc::GLTF_PARSE_FAILED, "/nodes/" + std::to_string(spring.head_node), "spring '" + spring.name + "' has no such node");
