@@ -87,8 +87,12 @@ int run(const BuildCommandOptions& options) {
   if (options.emit_ninja_given) checkOutputPath(options.emit_ninja);
   BuildManifest manifest = readBuildManifest(options.manifest, presets_dir);
   if (options.emit_ninja_given) {
-    std::string self = std::filesystem::canonical("/proc/self/exe").string();
-    writeFileAtomically(options.emit_ninja, ninjaFile(manifest, self, std::filesystem::absolute(options.manifest).string()));
+    // The rules run this rigbake again, one character (--character) or the summary (--summary-only) each.
+    const std::string manifest_path = std::filesystem::absolute(options.manifest).string();
+    const std::string build =
+        shellWord(std::filesystem::canonical("/proc/self/exe").string()) + " build " + shellWord(manifest_path);
+    const NinjaCommands commands = {"rigbake build --emit-ninja", build + " --character $name", build + " --summary-only"};
+    writeFileAtomically(options.emit_ninja, ninjaFile(manifest, manifest_path, commands));
     std::cerr << "wrote " << options.emit_ninja << ": " << manifest.characters.size() << " character edges\n";
     return 0;
   }

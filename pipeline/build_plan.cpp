@@ -27,14 +27,13 @@ std::string ninjaPath(const std::string& path) {
   return out;
 }
 
-// A shell word for the command line of a rule.
+}  // namespace
+
 std::string shellWord(const std::string& text) {
   std::string out = "'";
   for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
 }
-
-}  // namespace
 
 std::vector<int> buildOrder(const BuildManifest& manifest) {
   const int count = static_cast<int>(manifest.characters.size());
@@ -105,18 +104,17 @@ std::vector<std::string> CharacterOutputs::files() const {
   return files;
 }
 
-std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_command,
-                      const std::string& manifest_path) {
+std::string ninjaFile(const BuildManifest& manifest, const std::string& manifest_path, const NinjaCommands& commands) {
   std::string text;
-  text += "# Written by `rigbake build --emit-ninja`: one edge per character. Run with `ninja -f FILE`.\n";
+  text += "# Written by `" + commands.written_by + "`: one edge per character. Run with `ninja -f FILE`.\n";
   text += "ninja_required_version = 1.5\n";
   // Ninja's own log goes with the outputs, not into whatever directory ninja is started from.
   text += "builddir = " + ninjaPath(manifest.out) + "\n\n";
   text += "rule rigbake_character\n";
-  text += "  command = " + shellWord(rigbake_command) + " build " + shellWord(manifest_path) + " --character $name\n";
+  text += "  command = " + commands.character + "\n";
   text += "  description = rigbake $name\n\n";
   text += "rule rigbake_summary\n";
-  text += "  command = " + shellWord(rigbake_command) + " build " + shellWord(manifest_path) + " --summary-only\n";
+  text += "  command = " + commands.summary + "\n";
   text += "  description = rigbake summary\n\n";
   std::vector<std::string> all_models;
   for (int index : buildOrder(manifest)) {

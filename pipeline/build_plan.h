@@ -84,9 +84,20 @@ struct CharacterOutputs {
 };
 CharacterOutputs characterOutputs(const BuildManifest& manifest, const BuildCharacter& character);
 
-// A Ninja file: one edge per character (`rigbake build MANIFEST --character NAME`), with its input,
-// preset, muscle file and source character's muscles.json as inputs, and one edge for the summary.
-std::string ninjaFile(const BuildManifest& manifest, const std::string& rigbake_command,
-                      const std::string& manifest_path);
+// The commands a Ninja file's rules run. They are command lines of the CLI, so cli/ writes them
+// (pipeline/ knows no flags): each a shell command line, Ninja's `$name` standing for a character.
+struct NinjaCommands {
+  std::string written_by;  // the command that wrote the file, for its first comment line
+  std::string character;   // builds the one character `$name`
+  std::string summary;     // writes the build's summary from the characters' reports
+};
+
+// A Ninja file: one edge per character (commands.character), with its input, preset, muscle file,
+// source character's muscles.json and the manifest (`manifest_path`) as inputs, and one edge for the
+// summary (commands.summary).
+std::string ninjaFile(const BuildManifest& manifest, const std::string& manifest_path, const NinjaCommands& commands);
+
+// `text` as one single-quoted word of a POSIX shell command line (for NinjaCommands).
+std::string shellWord(const std::string& text);
 
 }  // namespace rigbake

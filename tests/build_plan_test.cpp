@@ -110,8 +110,12 @@ TEST_CASE("build plan: outputs under OUT/NAME and a Ninja graph in build order w
   CHECK(outputs.stamp == "/work/out/CesiumMan/.rigbake-inputs");
 
   manifest.characters[1].input = "/assets/my fox:1$.glb";  // Ninja escapes ' ', ':' and '$' with '$'
-  const std::string ninja = ninjaFile(manifest, "/opt/rig'bake", "/work/build.json");
-  CHECK(ninja.find("command = '/opt/rig'\\''bake' build '/work/build.json' --character $name") != std::string::npos);
+  // The commands are the CLI's (cli/cmd_build.cpp writes them); the file runs them as given.
+  const std::string build = shellWord("/opt/rig'bake") + " build " + shellWord("/work/build.json");
+  const std::string ninja = ninjaFile(manifest, "/work/build.json", {"rigbake build --emit-ninja", build + " --character $name", build + " --summary-only"});
+  CHECK(ninja.rfind("# Written by `rigbake build --emit-ninja`: one edge per character.", 0) == 0);
+  CHECK(ninja.find("command = '/opt/rig'\\''bake' build '/work/build.json' --character $name\n") != std::string::npos);
+  CHECK(ninja.find("command = '/opt/rig'\\''bake' build '/work/build.json' --summary-only\n") != std::string::npos);
   CHECK(ninja.find("/assets/my$ fox$:1$$.glb") != std::string::npos);
   // One edge per character, in build order.
   std::vector<size_t> at;
