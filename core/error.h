@@ -29,7 +29,8 @@ struct ErrorCode {
 // The one table of user-facing error codes, in the order they were introduced: X(NAME, EXIT, MEANING).
 // Each row becomes the symbol errc::NAME that every fail() and Error names, so a mistyped code does not
 // compile, and kErrorCodes, which `rigbake errors` prints and tests/cli_test.cpp checks docs/errors.md
-// against.
+// against. A meaning names no flag (scripts/check-flag-names.py): bake and build raise the same codes
+// from options their users spell differently; docs/errors.md says which flag or key leads to each.
 #define RIGBAKE_ERROR_CODES(X) \
   X(USAGE, kUsage, "The command line is malformed or an option value is out of range.") \
   X(IO_FILE_NOT_FOUND, kIo, "An input file does not exist or cannot be opened.") \
@@ -46,15 +47,15 @@ struct ErrorCode {
   X(MUSCLES_INVALID, kInvalidInput, "A muscle JSON file breaks the muscle schema.") \
   X(MUSCLES_MISMATCH, kInvalidInput, "A muscle JSON file names joints that the character does not have.") \
   X(JIGGLE_UNRESOLVED, kInvalidInput, "A jiggle preset names a joint, landmark or muscle the character does not have, or an unusable axis.") \
-  X(HITS_INVALID, kInvalidInput, "A hit file (--hits) breaks its schema or names a part that has no jiggle.") \
-  X(PACKED_FILE_INVALID, kInvalidInput, "A packed influence file (--packed-out) is damaged or not layout version 1.") \
+  X(HITS_INVALID, kInvalidInput, "A hit file breaks its schema or names a part that has no jiggle.") \
+  X(PACKED_FILE_INVALID, kInvalidInput, "A packed influence file is damaged or not layout version 1.") \
   X(MANIFEST_INVALID, kInvalidInput, "A build manifest breaks its schema or names an unknown muscles_from character.") \
   X(BUILD_FAILED, kChecksFailed, "rigbake build finished, but at least one character failed; each is named in the summary.") \
-  X(VALIDATE_CONFIG_INVALID, kInvalidInput, "A `rigbake validate --config` file breaks its format; the message gives the JSON pointer.") \
+  X(VALIDATE_CONFIG_INVALID, kInvalidInput, "A validation config file breaks its format; the message gives the JSON pointer.") \
   X(RETARGET_LOCATOR_UNANCHORED, kInvalidInput, "A muscle locator rides on a joint with no canonical landmark on it or above it, so it cannot be retargeted.") \
   X(RETARGET_SEGMENT_DEGENERATE, kInvalidInput, "Two landmarks that span a retarget frame coincide, so the segment has no direction.") \
   X(GLTF_EXTENSION_UNSUPPORTED, kInvalidInput, "The glTF's extensionsRequired names an extension rigbake cannot honour, so it must not be loaded.") \
-  X(ROM_CLIP_UNKNOWN, kInvalidInput, "--clips names a clip the ROM preset does not have.") \
+  X(ROM_CLIP_UNKNOWN, kInvalidInput, "A clip asked for by name is not one the ROM preset has.") \
   X(ROM_CLIP_UNAVAILABLE, kInvalidInput, "A ROM clip needs a landmark or joint the character lacks (no legs, no neck joint), or no ROM clip fits it at all.") \
   X(ROM_CLIP_EXISTS, kInvalidInput, "The character already has an animation with a ROM clip's name (it is a ROM output already).") \
   X(VIEW_PLAYER_MISSING, kIo, "rigbake view cannot find the bundled player script (scripts/install-player.sh builds it).") \
@@ -67,7 +68,7 @@ struct ErrorCode {
   X(BUILD_SOURCE_FAILED, kChecksFailed, "A build character's muscles_from source failed, so it could not be built (the run ends BUILD_FAILED).") \
   X(IO_INPUT_NOT_REGULAR, kInvalidInput, "An input path is a device, socket or directory, not a file to read (a FIFO or pipe is read).") \
   X(INPUT_TOO_LARGE, kInvalidInput, "An input file is larger than rigbake reads of its kind (2 GiB for a glTF, GLB or VRM, 64 MiB for JSON).") \
-  X(VRM_CONVERSION_UNSUPPORTED, kInvalidInput, "bake --vrm asks for a VRM version the input cannot become: it is not a VRM, or it is a VRM 1.0 asked to be 0.x.") \
+  X(VRM_CONVERSION_UNSUPPORTED, kInvalidInput, "A bake asks for a VRM version the input cannot become: it is not a VRM, or it is a VRM 1.0 asked to be 0.x.") \
   X(INTERNAL, kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input.")
 
 namespace errc {

@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""Layers: only cli/ knows rigbake's command-line flags. A string literal outside cli/ (in formats/,
+pipeline/, anatomy/, app/, runtime/, sample/, core/) that names a flag ("--muscles", "bake --jiggle")
+puts a CLI's spelling into a stage whose callers may not have that flag (build has manifest keys, an
+engine has neither); such a string says the fact in its own terms and cli/ (or build, as a manifest key)
+adds the flag where it prints.
+
+Usage: scripts/check-flag-names.py
+Comments may name flags (they explain why to a reader of the code); string literals may not, except the
+few listed in ALLOWED below, each with the reason it must stay.
+"""
+import os
+import re
+import sys
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+DIRS = ["formats", "pipeline", "anatomy", "app", "runtime", "sample", "core"]
+# A flag: "--" and a lowercase word, not inside a word or a longer dash run. CSS custom properties in
+# report.html's style sheet ("--ok: #2e7d32", "var(--ink)") are not flags.
+FLAG = re.compile(r"(?<![\w-])(?<!var\()--[a-z][a-z0-9-]*(?![\w-]*:)")
+
+# (path, flag): a literal in that file may name that flag. Keep this list short and say why beside each.
+ALLOWED = frozenset({
+    # none today: the ninja file's command lines (`build --character`), once in pipeline/build_plan.cpp,
+    # are written by cli/cmd_build.cpp and passed in as NinjaCommands.
+})
+
+
+def string_literals(text):
+    """(line, contents) of every string literal; comments, char literals and raw strings are handled so
+    a quote in a comment or a '"' cannot start a false string."""
+    found = []
+    i, n = 0, len(text)
+    while i < n:
+        c = text[i]
+        if text.startswith("//", i):
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            i = n if j < 0 else j + 2
+        elif c == "R" and text.startswith('R"', i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
+            m = re.match(r'R"([^(\s]*)\(', text[i:])
+            if not m:
+                i += 1
+                continue
+            start = i + m.end()
+            end = text.find(")" + m.group(1) + '"', start)
+            end = n if end < 0 else end
+            found.append((text.count("\n", 0, i) + 1, text[start:end]))
+            i = end + len(m.group(1)) + 2
+        elif c in "\"'":
+            j = i + 1
+            while j < n and text[j] != c:
+                j += 2 if text[j] == "\\" else 1
+            if c == '"':
+                found.append((text.count("\n", 0, i) + 1, text[i + 1:j]))
+            i = min(n, j + 1)
+        else:
+            i += 1
+    return found
+
+
+def main():
+    problems = []
+    for top in DIRS:
+        for dirpath, _, names in os.walk(os.path.join(REPO, top)):
+            for name in sorted(names):
+                if not name.endswith((".cpp", ".h")):
+                    continue
+                path = os.path.join(dirpath, name)
+                rel = os.path.relpath(path, REPO)
+                text = open(path, encoding="utf-8", errors="replace").read()
+                for line, literal in string_literals(text):
+                    for match in FLAG.finditer(literal):
+                        if (rel, match.group(0)) in ALLOWED:
+                            continue
+                        at = line + literal.count("\n", 0, match.start())
+                        excerpt = literal[max(0, match.start() - 40):match.end() + 40].replace("\n", " ")
+                        problems.append(f"{rel}:{at}: a string names the flag {match.group(0)}: ...{excerpt}...")
+    for problem in problems:
+        print("check-flag-names: " + problem, file=sys.stderr)
+    if problems:
+        print("check-flag-names: say it in the stage's own terms; cli/ adds the flag where it prints "
+              "(see FixableByOption and InvalidOption in core/error.h)", file=sys.stderr)
+        return 1
+    print(f"check-flag-names: no string literal in {', '.join(d + '/' for d in DIRS)} names a flag")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
