@@ -53,9 +53,12 @@ void creaseOneWay(const CreaseSide& from, const CreaseSide& to, const CreasePoin
     int nearest = -1;
     double best = reach * reach;
     grid.near(from.posed[a], reach, [&](int b) {
+      // Farther than the nearest found (or than the reach) first: most of the cells' points are, and
+      // the winner is the least (distance, index) whatever the order the cells are visited in.
+      const double d = (from.posed[a] - to.posed[static_cast<size_t>(b)]).squaredNorm();
+      if (d > best || (d == best && b >= nearest)) return;
       if ((from.bind[a] - to.bind[static_cast<size_t>(b)]).squaredNorm() < apart_squared) return;
       if (from.normal[a].dot(to.normal[static_cast<size_t>(b)]) > kCreaseFacing) return;
-      const double d = (from.posed[a] - to.posed[static_cast<size_t>(b)]).squaredNorm();
       if (d < best || (d == best && b < nearest)) {
         best = d;
         nearest = b;
@@ -79,7 +82,9 @@ CreaseMethodContact creaseContact(const CreaseSide& proximal, const CreaseSide& 
   // Opposing skin is looked for within the distance that separates it at bind: skin farther apart than
   // that when posed has not come together.
   const double reach = min_bind_apart;
-  const double cell = reach / 2.0;
+  // Cells as wide as the reach: a query looks in 27 of them, not the 125 of half-width cells (a hash
+  // lookup each); the points it visits are a superset of those within reach either way.
+  const double cell = reach;
   double closest = std::numeric_limits<double>::infinity();
   creaseOneWay(distal, proximal, CreasePointGrid(proximal.posed, cell), reach, min_bind_apart, &out, &closest);
   creaseOneWay(proximal, distal, CreasePointGrid(distal.posed, cell), reach, min_bind_apart, &out, &closest);
