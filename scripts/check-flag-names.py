@@ -13,6 +13,8 @@ import os
 import re
 import sys
 
+import cpp_lex
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DIRS = ["formats", "pipeline", "anatomy", "app", "runtime", "sample", "core"]
 # A flag: "--" and a lowercase word, not inside a word or a longer dash run. CSS custom properties in
@@ -29,36 +31,8 @@ ALLOWED = frozenset({
 def string_literals(text):
     """(line, contents) of every string literal; comments, char literals and raw strings are handled so
     a quote in a comment or a '"' cannot start a false string."""
-    found = []
-    i, n = 0, len(text)
-    while i < n:
-        c = text[i]
-        if text.startswith("//", i):
-            j = text.find("\n", i)
-            i = n if j < 0 else j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            i = n if j < 0 else j + 2
-        elif c == "R" and text.startswith('R"', i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
-            m = re.match(r'R"([^(\s]*)\(', text[i:])
-            if not m:
-                i += 1
-                continue
-            start = i + m.end()
-            end = text.find(")" + m.group(1) + '"', start)
-            end = n if end < 0 else end
-            found.append((text.count("\n", 0, i) + 1, text[start:end]))
-            i = end + len(m.group(1)) + 2
-        elif c in "\"'":
-            j = i + 1
-            while j < n and text[j] != c:
-                j += 2 if text[j] == "\\" else 1
-            if c == '"':
-                found.append((text.count("\n", 0, i) + 1, text[i + 1:j]))
-            i = min(n, j + 1)
-        else:
-            i += 1
-    return found
+    return [(text.count("\n", 0, start) + 1, text[body_start:body_end])
+            for kind, start, _, body_start, body_end in cpp_lex.spans(text) if kind == "string"]
 
 
 def main():

@@ -16,6 +16,8 @@ import os
 import re
 import sys
 
+import cpp_lex
+
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DIRS = ["cli", "formats", "pipeline", "anatomy", "sample", "runtime", "app"]
 FILE_LIMIT = 900
@@ -26,40 +28,12 @@ CONTROL = {"if", "for", "while", "switch", "catch", "return", "sizeof", "decltyp
 
 def blank_comments_and_strings(text):
     """Replaces comments and string/char literals with spaces, keeping newlines (line numbers)."""
-    out = []
-    i, n = 0, len(text)
-    while i < n:
-        c = text[i]
-        if text.startswith("//", i):
-            j = text.find("\n", i)
-            j = n if j < 0 else j
-            out.append(" " * (j - i))
-            i = j
-        elif text.startswith("/*", i):
-            j = text.find("*/", i + 2)
-            j = n if j < 0 else j + 2
-            out.append(re.sub(r"[^\n]", " ", text[i:j]))
-            i = j
-        elif c == "R" and text.startswith('R"', i) and (i == 0 or not (text[i - 1].isalnum() or text[i - 1] == "_")):
-            m = re.match(r'R"([^(\s]*)\(', text[i:])
-            if not m:
-                out.append(c)
-                i += 1
-                continue
-            end = text.find(")" + m.group(1) + '"', i)
-            j = n if end < 0 else end + len(m.group(1)) + 2
-            out.append(re.sub(r"[^\n]", " ", text[i:j]))
-            i = j
-        elif c in "\"'":
-            j = i + 1
-            while j < n and text[j] != c:
-                j += 2 if text[j] == "\\" else 1
-            j = min(n, j + 1)
-            out.append(re.sub(r"[^\n]", " ", text[i:j]))
-            i = j
-        else:
-            out.append(c)
-            i += 1
+    out, done = [], 0
+    for _, start, end, _, _ in cpp_lex.spans(text):
+        out.append(text[done:start])
+        out.append(re.sub(r"[^\n]", " ", text[start:end]))
+        done = end
+    out.append(text[done:])
     return "".join(out)
 
 
