@@ -37,21 +37,14 @@ def string_literals(text):
 
 def main():
     problems = []
-    for top in DIRS:
-        for dirpath, _, names in os.walk(os.path.join(REPO, top)):
-            for name in sorted(names):
-                if not name.endswith((".cpp", ".h")):
+    for rel, text in cpp_lex.sources(REPO, DIRS):
+        for line, literal in string_literals(text):
+            for match in FLAG.finditer(literal):
+                if (rel, match.group(0)) in ALLOWED:
                     continue
-                path = os.path.join(dirpath, name)
-                rel = os.path.relpath(path, REPO)
-                text = open(path, encoding="utf-8", errors="replace").read()
-                for line, literal in string_literals(text):
-                    for match in FLAG.finditer(literal):
-                        if (rel, match.group(0)) in ALLOWED:
-                            continue
-                        at = line + literal.count("\n", 0, match.start())
-                        excerpt = literal[max(0, match.start() - 40):match.end() + 40].replace("\n", " ")
-                        problems.append(f"{rel}:{at}: a string names the flag {match.group(0)}: ...{excerpt}...")
+                at = line + literal.count("\n", 0, match.start())
+                excerpt = literal[max(0, match.start() - 40):match.end() + 40].replace("\n", " ")
+                problems.append(f"{rel}:{at}: a string names the flag {match.group(0)}: ...{excerpt}...")
     for problem in problems:
         print("check-flag-names: " + problem, file=sys.stderr)
     if problems:

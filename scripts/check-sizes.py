@@ -73,24 +73,14 @@ def functions(text):
 
 def measure():
     sizes = {}
-    for top in DIRS:
-        root = os.path.join(REPO, top)
-        if not os.path.isdir(root):
-            continue
-        for dirpath, _, names in os.walk(root):
-            for name in sorted(names):
-                if not name.endswith((".cpp", ".h")):
-                    continue
-                path = os.path.join(dirpath, name)
-                rel = os.path.relpath(path, REPO)
-                text = open(path, encoding="utf-8", errors="replace").read()
-                lines = text.count("\n")
-                if lines > FILE_LIMIT:
-                    sizes[rel] = lines
-                for fn, first, count in functions(text):
-                    if count > FUNCTION_LIMIT:
-                        key = f"{rel}:{fn}"
-                        sizes[key] = max(sizes.get(key, 0), count)
+    for rel, text in cpp_lex.sources(REPO, DIRS):
+        lines = text.count("\n")
+        if lines > FILE_LIMIT:
+            sizes[rel] = lines
+        for fn, first, count in functions(text):
+            if count > FUNCTION_LIMIT:
+                key = f"{rel}:{fn}"
+                sizes[key] = max(sizes.get(key, 0), count)
     return sizes
 
 

@@ -1,6 +1,7 @@
 """The comments and literals of C++ source, for the source checks (check-sizes.py blanks them before it
 matches braces; check-flag-names.py reads the string literals): one scanner, so a quote in a comment, a
 '"' or a raw string cannot fool one check and not the other."""
+import os
 import re
 
 
@@ -41,3 +42,14 @@ def spans(text):
             i = end
         else:
             i += 1
+
+
+def sources(repo, dirs):
+    """Yields (path relative to `repo`, text) of every .cpp and .h file under the top-level `dirs`, the
+    files of each directory in name order; a directory that is not there yields nothing."""
+    for top in dirs:
+        for dirpath, _, names in os.walk(os.path.join(repo, top)):
+            for name in sorted(names):
+                if name.endswith((".cpp", ".h")):
+                    path = os.path.join(dirpath, name)
+                    yield os.path.relpath(path, repo), open(path, encoding="utf-8", errors="replace").read()
