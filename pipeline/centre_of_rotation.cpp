@@ -108,7 +108,8 @@ RotationCentres optimizedRotationCentres(const MeshPart& mesh, const InfluenceSe
   }
   // A centre depends on the vertex's weights alone, and skinned meshes repeat rows (a ring of a limb,
   // both sides of a UV seam): each distinct row is summed once, as its first vertex would be, and every
-  // vertex with it gets the same bits. On the 100k-vertex sample this is most of a first bake's time.
+  // vertex with it gets the same bits. (These sums are most of the 100k-vertex sample's first bake; its
+  // smooth procedural weights repeat few rows, so there this saves about a tenth.)
   std::map<std::vector<std::pair<int, double>>, size_t> row_index;
   std::vector<SparseWeights> rows;
   std::vector<size_t> row_of_vertex(count);

@@ -53,16 +53,15 @@ void creaseOneWay(const CreaseSide& from, const CreaseSide& to, const CreasePoin
     int nearest = -1;
     double best = reach * reach;
     grid.near(from.posed[a], reach, [&](int b) {
-      // Farther than the nearest found (or than the reach) first: most of the cells' points are, and
-      // the winner is the least (distance, index) whatever the order the cells are visited in.
+      // First whether b comes before the nearest found so far in (distance, index) order (at the start:
+      // within the reach), which most of the cells' points do not. The least (distance, index) wins
+      // whatever order the cells are visited in, so a point that passes all three tests is the nearest.
       const double d = (from.posed[a] - to.posed[static_cast<size_t>(b)]).squaredNorm();
       if (d > best || (d == best && b >= nearest)) return;
       if ((from.bind[a] - to.bind[static_cast<size_t>(b)]).squaredNorm() < apart_squared) return;
       if (from.normal[a].dot(to.normal[static_cast<size_t>(b)]) > kCreaseFacing) return;
-      if (d < best || (d == best && b < nearest)) {
-        best = d;
-        nearest = b;
-      }
+      best = d;
+      nearest = b;
     });
     if (nearest < 0) continue;
     *closest = std::min(*closest, std::sqrt(best));
