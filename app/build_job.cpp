@@ -137,6 +137,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   options.fit.max_poses = character.fit_poses;
   options.motion = character.muscle_motion;
   options.helper_joints = character.helper_joints;
+  options.measure_skin = character.stats;  // only the stats show them (pipeline/bake.h)
   return request;
 }
 

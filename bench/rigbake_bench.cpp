@@ -9,6 +9,9 @@
 // `error-only MUSCLES.json` is that re-bake without the volume figures (BakeOptions::measure_quality
 // off): the work issue 14 was filed against, before issue 11 added the response fit and the per-frame
 // volumes of three skinnings; every frame of every clip still gets the deformation error.
+// `stats` is a first bake that also measures the skin's surface figures (seams, joint regions,
+// roughness, centres of rotation, creases: BakeOptions::measure_skin), as `bake --stats` or `--json`
+// does; a plain `rigbake bake`, and the other modes, leave them to `rigbake validate`.
 //
 // The bake is app::bakeJob's, as `rigbake bake` runs it; the stages are its BakeJobTimings: load (the file
 // and its landmarks), place (muscle preset, muscles, body regions), the bake's own stages, and write (the
@@ -25,18 +28,18 @@ using namespace rigbake;
 
 int main(int argc, char** argv) {
   if (argc < 4) {
-    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [fit|fitted|error-only MUSCLES.json]]]\n";
+    std::cerr << "usage: rigbake_bench INPUT OUTPUT.glb PRESETS_DIR [influences [threads [stats | fit|fitted|error-only MUSCLES.json]]]\n";
     return 1;
   }
   const std::string input = argv[1], output = argv[2], presets = argv[3];
   const int influences = argc > 4 ? std::stoi(argv[4]) : 10;
   const int threads = argc > 5 ? std::stoi(argv[5]) : 0;  // 0: one per core, as bake --threads
   const std::string mode = argc > 6 ? argv[6] : "";
-  if (!mode.empty() && (argc < 8 || (mode != "fit" && mode != "fitted" && mode != "error-only"))) {
-    std::cerr << "rigbake_bench: the sixth argument is 'fit', 'fitted' or 'error-only', followed by a muscle JSON path\n";
+  if (!mode.empty() && mode != "stats" && (argc < 8 || (mode != "fit" && mode != "fitted" && mode != "error-only"))) {
+    std::cerr << "rigbake_bench: the sixth argument is 'stats', or 'fit', 'fitted' or 'error-only' followed by a muscle JSON path\n";
     return 1;
   }
-  const std::string muscles_path = argc > 7 ? argv[7] : "";
+  const std::string muscles_path = mode != "stats" && argc > 7 ? argv[7] : "";
   const bool error_only = mode == "error-only";
   const bool fitted = mode == "fitted" || error_only;
   try {
@@ -49,6 +52,7 @@ int main(int argc, char** argv) {
     request.options.influences = influences;
     request.options.threads = threads;
     request.options.measure_quality = !error_only;
+    request.options.measure_skin = mode == "stats";
     const app::Presets presets_read = app::loadPresets(presets);
     const app::BakeOutputs out = app::bakeJob(request, presets_read);
     if (mode == "fit") {
@@ -71,6 +75,7 @@ int main(int argc, char** argv) {
                                 {"threads", threads},
                                 {"fitted", fitted},
                                 {"volumes", !error_only},
+                                {"skin_figures", mode == "stats"},
                                 {"load", timings.load},
                                 {"place", timings.place},
                                 {"evaluate", timings.bake.evaluate},

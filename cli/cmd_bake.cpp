@@ -138,6 +138,10 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << bake.quality.joint_regions[joint_region] << "' in '" << joint_clip->clip << "', " << 100.0 * loss.loss
               << " points (input skinning " << 100.0 * loss.input << " %, rig " << 100.0 * loss.rig << " %, volume about the joint)\n";
   }
+  if (!options.json && options.stats_output.empty() && !bake.quality.clips.empty()) {
+    std::cerr << "skin figures (seams, roughness, creases, joint regions, centres of rotation): not measured; --stats or "
+                 "--json measures them here, `rigbake validate` in the baked file\n";
+  }
   if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
     const ClipQuality* worst = nullptr;
     for (const ClipQuality& clip : bake.quality.clips)
@@ -198,6 +202,7 @@ app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const Progress
   bake.fit.max_poses = options.fit_poses;
   parseMuscleMotion(options.muscle_motion, &bake.motion);
   bake.helper_joints = options.helper_joints;
+  bake.measure_skin = !options.stats_output.empty() || options.json;
   request.progress = progress;
   request.notes = printNotesOf(options.character);
   return request;
@@ -242,7 +247,8 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       "and as packed buffers (docs/packed-influences.md). By default the muscles move at run time from the "
       "RIGBAKE_muscle_rig extension, adding no animation data (docs/runtime.md). Reports the weights' deformation "
       "error in mm and the volume per clip against plain and dual-quaternion skinning (--stats for every body "
-      "region).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
+      "region and the skin's figures: seams, roughness, creases, joint regions, centres of rotation, which also "
+      "print their worst case here; `rigbake validate` checks them in the baked file).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
   command->add_option("--muscles", options->muscles,
@@ -268,7 +274,9 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
   command->add_option("--stats", options->stats_output,
                       "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
-                      "body region, bytes per vertex) as JSON; - for standard output");
+                      "body region, bytes per vertex, and the skin's: seams, roughness, creases and joint regions against "
+                      "plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for standard output. The skin's "
+                      "figures cost more than the rest of the bake: a bake without --stats or --json skips them");
   command->add_option("--response", options->response,
                       "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "
                       "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "

@@ -544,8 +544,8 @@ void measureBakeFigures(const Character& character, const BakeOptions& options, 
   reportProgress(options.progress, "measuring every frame");
   DeformationMeasures measures = measureDeformation(character, options.regions, measured, rigged, clips,
                                                     options.measure_quality, error_weights, options.threads);
-  if (options.measure_quality) {
-    result->quality = std::move(measures.quality);
+  if (options.measure_quality) result->quality = std::move(measures.quality);
+  if (options.measure_quality && options.measure_skin) {
     measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result->quality);
     measureJointRegions(character, measured, clips, options.threads, &result->quality);
     measureSurfaceFigures(character, measured, clips, character.skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,

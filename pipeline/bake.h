@@ -56,6 +56,11 @@ struct BakeOptions {
   // Creases (anatomy/creases.h) for the crease contact figures; none: not measured.
   std::vector<Crease> creases;
   bool measure_quality = true;  // volumes against plain and dual-quaternion skinning, per clip and region
+  // With measure_quality, the skin's surface figures too (issue 29): seams, joint regions, roughness
+  // against dual quaternions and centres of rotation, crease contact. They cost more than the rest of
+  // the bake together (bench/run: 3.4 s of the 100k sample's 4 s first bake), so the CLI asks for them
+  // only when figures are written (--stats, --json); `rigbake validate` measures them from the file.
+  bool measure_skin = true;
   ResponseMode response = ResponseMode::kAuto;
   ResponseFitOptions fit;
   // Threads for the per-vertex, per-frame and per-pose loops; 0: one per core. Every output is the same

@@ -69,6 +69,30 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
   CHECK(packed[0].vertex_count == stats["vertices"].get<int>());
 }
 
+TEST_CASE("cli bake: without --stats or --json the skin's figures are skipped, said in one line, and the file is the same") {
+  TempDir dir;
+  const CliResult plain = runCli("bake " + sampleGlbPathForCli() + " --influences 10 -o " + (dir / "plain.glb"));
+  const CliResult stats = runCli("bake " + sampleGlbPathForCli() + " --influences 10 -o " + (dir / "stats.glb") + " --stats " +
+                                 (dir / "stats.json"));
+  INFO(plain.err);
+  REQUIRE(plain.exit_code == 0);
+  REQUIRE(stats.exit_code == 0);
+  // The figures cost more than the rest of the bake (bench/run); they change nothing in the file.
+  CHECK(slurp(dir / "plain.glb") == slurp(dir / "stats.glb"));
+  CHECK(plain.err.find("skin figures (seams, roughness, creases, joint regions, centres of rotation): not measured; --stats") !=
+        std::string::npos);
+  CHECK(stats.err.find("skin figures") == std::string::npos);
+  for (const char* line : {"crease '", "roughness rise", "joint region losing", ", centres of rotation "}) {
+    INFO(line);
+    CHECK(plain.err.find(line) == std::string::npos);
+    CHECK(stats.err.find(line) != std::string::npos);
+  }
+  // The volumes per clip against plain and dual-quaternion skinning are measured either way.
+  CHECK(plain.err.find("volume in 'ElbowFlexion': input skinning -0.74 %, dual quaternions -0.06 %") != std::string::npos);
+  // Three lines (roughness, crease, joint region) become the one that says they were not measured.
+  CHECK(lineCount(plain.err) == lineCount(stats.err) - 3 + 1);
+}
+
 TEST_CASE("cli bake: fewer influences cost more error, in the reported figures") {
   TempDir dir;
   double previous = 0.0;
