@@ -43,6 +43,8 @@ std::string bakeOnlyOptions(const BuildCharacter& character) {
   if (character.vrm_springs_only) text += " vrm_springs_only";
   if (character.fps != 0.0) text += " fps " + std::to_string(character.fps);
   if (character.fit_poses != ResponseFitOptions{}.max_poses) text += " fit_poses " + std::to_string(character.fit_poses);
+  if (character.fit_smoothness != ResponseFitOptions{}.smoothness_weight)
+    text += " fit_smoothness " + std::to_string(character.fit_smoothness);
   if (character.stats) text += " stats";
   if (character.packed) text += " packed";
   return text;
@@ -135,6 +137,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   options.threads = bake_threads;
   options.response = character.response;
   options.fit.max_poses = character.fit_poses;
+  options.fit.smoothness_weight = character.fit_smoothness;
   options.motion = character.muscle_motion;
   options.helper_joints = character.helper_joints;
   options.measure_skin = character.stats;  // only the stats show them (pipeline/bake.h)

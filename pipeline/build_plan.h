@@ -25,7 +25,7 @@ struct BuildCharacter {
   ResponseMode response = ResponseMode::kAuto;
   int vrm = -1;              // "vrm": VRM version to write (0 or 1, as rigbake bake --vrm), -1 as the input is
   // What `rigbake bake` does with --map, --regions, --jiggle, --hits, --vrm-springs-only, --fps,
-  // --fit-poses, --stats and --packed-out (docs/build.md).
+  // --fit-poses, --fit-smoothness, --stats and --packed-out (docs/build.md).
   std::string map;           // a naming map file (resolved) or a shipped map's name; empty: detected
   std::string regions;       // region preset file (resolved); empty: the shipped "body"
   std::string jiggle;        // jiggle preset file (resolved), or empty
@@ -33,6 +33,7 @@ struct BuildCharacter {
   bool vrm_springs_only = false;
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
+  double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
   bool stats = false;        // also write OUT/NAME/stats.json
   bool packed = false;       // also write OUT/NAME/NAME.rbpk
   std::string pointer;       // JSON pointer in the manifest, for messages
@@ -53,6 +54,7 @@ struct BuildManifest {
   bool vrm_springs_only = false;
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
+  double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
   bool stats = false, packed = false;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;

@@ -78,6 +78,10 @@ struct PoseScratch {
   std::vector<MuscleKeyMotion> key_motion;
   std::vector<MuscleSums> sums;
   std::vector<Eigen::Matrix4d> apart;  // a muscle's skinning matrix less its carrier's
+  std::vector<std::vector<Eigen::Vector3d>> rig_move;  // per part, per moving vertex: d, the rig's move against the input
+  std::vector<int> touched_muscles;
+  std::vector<char> muscle_touched;
+  std::vector<int> local_unknown;  // unknown -> its index in the pose's rough_unknowns, -1 when not moved
   std::vector<Eigen::Affine3d> frame;
   FloatSkinFrame float_frame;
 };
@@ -94,6 +98,8 @@ PoseScratch poseScratch(const std::vector<FitPart>& fit_parts, size_t muscle_cou
   scratch.body_shares.resize(part_count);
   scratch.key_motion.resize(muscle_count);
   scratch.apart.resize(muscle_count);
+  scratch.rig_move.resize(part_count);
+  scratch.muscle_touched.assign(muscle_count, 0);
   for (size_t p = 0; p < part_count; ++p) scratch.gradients[p].assign(fit_parts[p].moving_vertices.size(), Eigen::Vector3d::Zero());
   return scratch;
 }
@@ -112,11 +118,21 @@ struct FitProblem {
   const FitSurfaces& surfaces;
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
+  // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece (CSR).
+  const std::vector<std::vector<int>>& ring_first;
+  const std::vector<std::vector<int>>& ring;
+  double roughness_scale;  // options.smoothness_weight / sqrt(the fitted vertices of every part)
 };
 
 // One pose's share of the model (joined in pose order, so any thread count gives the same system).
 struct PoseRows {
   HingeLinearModel model;
+  // The smoothness rows, as their normal equations over the unknowns the pose moves (`rough_unknowns`,
+  // the keys whose hat weight is not zero there; the rows themselves are one per fitted vertex).
+  std::vector<int> rough_unknowns;
+  Eigen::MatrixXd rough_normal;
+  Eigen::VectorXd rough_gradient;
+  double rough_square = 0.0;
   double body_square = 0.0;
   double violation = 0.0;  // the violated hinges' squares, candidates or not
 };
@@ -142,6 +158,7 @@ class PoseRowBuilder {
   double measureVolumes(std::vector<double>* region_volume);
   void addRegionHinges(const std::vector<double>& region_volume, bool measure_only, PoseRows* out);
   void addSkinFloorHinges(const RigEvaluation& evaluation, bool measure_only, PoseRows* out);
+  void addRoughness(bool measure_only, PoseRows* out);
 
   const FitProblem& problem_;
   PoseScratch& s_;
@@ -385,6 +402,108 @@ void PoseRowBuilder::addSkinFloorHinges(const RigEvaluation& evaluation, bool me
   }
 }
 
+// The smoothness term: per fitted vertex v, r_v = scale * (d_v - mean over its ring of d_u) . n_v, d the
+// rig's move against the input skinning, linear in the amplitudes; its rows go into the pose's normal
+// equations (a few muscles per row, so each row's square is a small block).
+void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
+  const FitSurfaces& surfaces = problem_.surfaces;
+  const ResponseLayout& layout = problem_.layout;
+  const int joint_count = problem_.skeleton.size();
+  const size_t muscle_count = problem_.muscles.parts.size();
+  const int unknowns = layout.unknowns();
+  for (size_t m = 0; m < muscle_count; ++m)
+    s_.apart[m] = s_.frame[joint_count + m].matrix() - s_.frame[problem_.frames.carrier_of[m]].matrix();
+  if (!measure_only) {
+    s_.local_unknown.assign(static_cast<size_t>(unknowns), -1);
+    for (size_t m = 0; m < muscle_count; ++m) {
+      const int kind = layout.kind[m];
+      if (kind < 0) continue;
+      const MuscleKeyMotion& motion = s_.key_motion[m];
+      for (int k = 0; k < kKeys; ++k) {
+        const int u = kind * kKeys + k;
+        if ((motion.up[k] == 0.0 && motion.side[k] == 0.0 && motion.scale[k] == 0.0) || s_.local_unknown[u] >= 0) continue;
+        s_.local_unknown[u] = static_cast<int>(out->rough_unknowns.size());
+        out->rough_unknowns.push_back(u);
+      }
+    }
+    const Eigen::Index active = static_cast<Eigen::Index>(out->rough_unknowns.size());
+    out->rough_normal = Eigen::MatrixXd::Zero(active, active);
+    out->rough_gradient = Eigen::VectorXd::Zero(active);
+  }
+  std::vector<int> index;
+  std::vector<double> value;
+  for (size_t p = 0; p < surfaces.parts.size(); ++p) {
+    const FitPart& part = surfaces.parts[p];
+    std::vector<Eigen::Vector3d>& move = s_.rig_move[p];
+    move.assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+    for (size_t c = 0; c < part.moving_vertices.size(); ++c) {
+      if (!part.hasSlots(static_cast<int>(c))) continue;
+      const Eigen::Vector4d bind = part.mesh->positions[part.moving_vertices[c]].homogeneous();
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      for (const MuscleVertex* mv = part.slotsBegin(static_cast<int>(c)); mv != part.slotsEnd(static_cast<int>(c)); ++mv)
+        sum += mv->weight * (s_.apart[mv->muscle] * bind).head<3>();
+      move[c] = sum;
+    }
+    const std::vector<int>& first = problem_.ring_first[p];
+    const std::vector<int>& ring = problem_.ring[p];
+    for (int v : part.patches[0].fitted) {
+      const int begin = first[static_cast<size_t>(v)], end = first[static_cast<size_t>(v) + 1];
+      if (begin == end) continue;
+      Eigen::Vector3d n = s_.normals[p][v];
+      const double length = n.norm();
+      if (!(length > 0.0)) continue;
+      n /= length;
+      const double share = 1.0 / (end - begin);
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      for (int k = begin; k < end; ++k) mean += move[static_cast<size_t>(ring[k])];
+      const double scale = problem_.roughness_scale;
+      const double residual = scale * (move[v] - share * mean).dot(n);
+      out->rough_square += residual * residual;
+      if (measure_only) continue;
+      auto touch = [&](int c, double factor) {
+        for (const MuscleVertex* mv = part.slotsBegin(c); mv != part.slotsEnd(c); ++mv) {
+          if (!s_.muscle_touched[mv->muscle]) {
+            s_.muscle_touched[mv->muscle] = 1;
+            s_.touched_muscles.push_back(mv->muscle);
+          }
+        }
+        addVertex(part, c, n, factor);
+      };
+      touch(v, 1.0);
+      for (int k = begin; k < end; ++k) touch(ring[k], -share);
+      index.clear();
+      value.clear();
+      for (int m : s_.touched_muscles) {
+        s_.muscle_touched[m] = 0;
+        MuscleSums& sum = s_.sums[m];
+        const MuscleKeyMotion& motion = s_.key_motion[m];
+        const int kind = layout.kind[m];
+        if (kind >= 0) {
+          for (int k = 0; k < kKeys; ++k) {
+            // A key whose hat weight is zero at this pose (most of them) has no entry.
+            if (motion.up[k] == 0.0 && motion.side[k] == 0.0 && motion.scale[k] == 0.0) continue;
+            const double entry = scale * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale);
+            const int u = s_.local_unknown[kind * kKeys + k];
+            auto at = std::find(index.begin(), index.end(), u);
+            if (at == index.end()) {
+              index.push_back(u);
+              value.push_back(entry);
+            } else {
+              value[static_cast<size_t>(at - index.begin())] += entry;
+            }
+          }
+        }
+        sum = MuscleSums{};
+      }
+      s_.touched_muscles.clear();
+      for (size_t a = 0; a < index.size(); ++a) {
+        out->rough_gradient[index[a]] += value[a] * residual;
+        for (size_t b = 0; b < index.size(); ++b) out->rough_normal(index[a], index[b]) += value[a] * value[b];
+      }
+    }
+  }
+}
+
 // The pose's rows: the whole body's change always (weights make volumes fractions of their bind
 // volume), the regions' and the skin floors' hinges near or past their bounds. `measure_only` leaves
 // the Jacobian rows out: the last pass's would be thrown away.
@@ -413,6 +532,7 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
   }
   addRegionHinges(region_volume, measure_only, out);
   if (options.skin_weight > 0.0) addSkinFloorHinges(evaluation, measure_only, out);
+  if (problem_.roughness_scale > 0.0) addRoughness(measure_only, out);
 }
 
 // Every pose's rows at the muscles' current responses, joined in pose order, on `threads` threads; the
@@ -428,7 +548,17 @@ HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& 
   HingeEvaluation evaluation;
   HingeLinearModel& model = evaluation.model;
   double body_squares = 0.0;
+  const int unknowns = problem.layout.unknowns();
+  Eigen::MatrixXd rough_normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
+  Eigen::VectorXd rough_gradient = Eigen::VectorXd::Zero(unknowns);
   for (PoseRows& pose : pose_rows) {
+    evaluation.objective += pose.rough_square;
+    for (size_t a = 0; a < pose.rough_unknowns.size(); ++a) {
+      const Eigen::Index ia = static_cast<Eigen::Index>(a);
+      rough_gradient[pose.rough_unknowns[a]] += pose.rough_gradient[ia];
+      for (size_t b = 0; b < pose.rough_unknowns.size(); ++b)
+        rough_normal(pose.rough_unknowns[a], pose.rough_unknowns[b]) += pose.rough_normal(ia, static_cast<Eigen::Index>(b));
+    }
     body_squares += pose.body_square;
     evaluation.objective += pose.violation;
     for (double r : pose.model.rhs) evaluation.objective += r * r;
@@ -436,6 +566,19 @@ HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& 
     model.slack.insert(model.slack.end(), pose.model.slack.begin(), pose.model.slack.end());
     for (Eigen::VectorXd& row : pose.model.rows) model.rows.push_back(std::move(row));
     for (Eigen::VectorXd& row : pose.model.hinges) model.hinges.push_back(std::move(row));
+  }
+  // The smoothness rows' normal equations N, g as rows: N = V L V^T, rows sqrt(l) v^T with right-hand
+  // sides -(v . g) / sqrt(l), whose squares are the rows' own (the objective has them already).
+  if (!measure_only && problem.roughness_scale > 0.0) {
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(rough_normal);
+    const double largest = eigen.eigenvalues().maxCoeff();
+    for (int i = 0; i < unknowns; ++i) {
+      const double l = eigen.eigenvalues()[i];
+      if (!(l > 1e-12 * largest)) continue;
+      const Eigen::VectorXd v = eigen.eigenvectors().col(i);
+      model.rows.push_back(std::sqrt(l) * v);
+      model.rhs.push_back(-v.dot(rough_gradient) / std::sqrt(l));
+    }
   }
   *rms = std::sqrt(body_squares / static_cast<double>(poses.size()));
   return evaluation;
@@ -547,9 +690,31 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   prior.scale.resize(layout.unknowns());
   for (int u = 0; u < layout.unknowns(); ++u) prior.scale[u] = std::max(reach[u], 1e-3);
 
+  // Each moving vertex's one-ring over the whole surface's moving piece, for the smoothness term.
+  std::vector<std::vector<int>> ring_first(surfaces.parts.size()), ring(surfaces.parts.size());
+  size_t fitted_vertices = 0;
+  for (size_t p = 0; p < surfaces.parts.size(); ++p) {
+    const FitPart& part = surfaces.parts[p];
+    std::vector<std::set<int>> neighbours(part.moving_vertices.size());
+    if (part.patches[0].first_vertex >= 0) {
+      for (const auto& t : part.patches[0].moving.triangles)
+        for (int a = 0; a < 3; ++a) {
+          neighbours[static_cast<size_t>(t[a])].insert(t[(a + 1) % 3]);
+          neighbours[static_cast<size_t>(t[a])].insert(t[(a + 2) % 3]);
+        }
+      fitted_vertices += part.patches[0].fitted.size();
+    }
+    ring_first[p].push_back(0);
+    for (const std::set<int>& around : neighbours) {
+      ring[p].insert(ring[p].end(), around.begin(), around.end());
+      ring_first[p].push_back(static_cast<int>(ring[p].size()));
+    }
+  }
+  const double roughness_scale =
+      fitted_vertices > 0 ? options.smoothness_weight / std::sqrt(static_cast<double>(fitted_vertices)) : 0.0;
   const FitProblem problem{skeleton, *muscles, layout, options, frames, surfaces, fixed,
                            options.compressed_in_share * muscles->body_height, options.stretch_hollow_share * muscles->body_height,
-                           options.skin_band_share * muscles->body_height};
+                           options.skin_band_share * muscles->body_height, ring_first, ring, roughness_scale};
   std::vector<PoseScratch> scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (PoseScratch& worker : scratch) worker = poseScratch(surfaces.parts, muscle_count);
   std::vector<double> rms(static_cast<size_t>(options.iterations) + 1, 0.0);

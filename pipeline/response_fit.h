@@ -63,6 +63,13 @@ struct ResponseFitOptions {
   double skin_min_compression = 0.15;
   double stretch_hollow_share = 0.0008;
   double skin_band_share = 0.0005;
+  // Smoothness (issue 29's "lumps"): per fitted pose, the root mean square over the fitted muscles'
+  // vertices of L(d) . n, the umbrella Laplacian of the rig's move d against the input skinning along the
+  // normal (the quantity the roughness figure takes, pipeline/surface_figures.h), times smoothness_weight
+  // per metre, against the body's volume change at body_weight. 0 (the default): no such term. It trades
+  // volume for smoothness on every character measured, differently per mesh (the Laplacian grows with
+  // the square of the edge length): docs/deformation-quality.md, "The fit's smoothness term".
+  double smoothness_weight = 0.0;
   // Bounds on the amplitudes. Compression: [min_compression_fraction x the talk's, max_amplitude];
   // stretch: [0, max_stretch_amplitude] and no thinner across the fibre than min_stretch_scale (a
   // stretched muscle thins, never swells); twist: [-min_twist_amplitude, max_twist_amplitude] (a twist

@@ -498,7 +498,7 @@ TEST_CASE("cli build: --emit-ninja '' is USAGE, not a build") {
   CHECK(!fs::exists(dir / "p/out"));
 }
 
-TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, fps, fit poses and spring bones, byte for byte as `rigbake bake` does") {
+TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, fps, fit poses and smoothness and spring bones, byte for byte as `rigbake bake` does") {
   test::TempDir dir;
   copyFile(test::sampleGlbPathForCli(), dir / "hero.glb");
   REQUIRE(runCli("sample --vrm 1 -o " + ext::shellQuote(dir / "hero1.vrm")).exit_code == 0);
@@ -507,7 +507,7 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
       {"out", "out"}, {"response", "keep"}, {"stats", true}, {"packed", true}, {"jiggle", "biceps"},
       {"characters",
        {{{"name", "hero"}, {"input", "hero.glb"}, {"influences", 4}, {"map", "gow"}, {"regions", "body"}, {"hits", "hits.json"},
-         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}},
+         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}},
         {{"name", "springy"}, {"input", "hero1.vrm"}, {"vrm_springs_only", true}},
         {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}}}}};
   std::ofstream(dir / "manifest.json") << manifest.dump(2);
@@ -529,7 +529,7 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
     REQUIRE(run.exit_code == 0);
   };
   bake("hero.glb", "hero", "--influences 4 --map gow --regions body --hits " + ext::shellQuote(dir / "hits.json") +
-                               " --fps 20 --response fit --fit-poses 4");
+                               " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500");
   bake("hero1.vrm", "springy", "--vrm-springs-only --response keep --influences 10");  // build's default: 10
   for (const std::string name : {"hero", "springy"}) {
     INFO(name);
