@@ -45,6 +45,9 @@ struct BakeCommandOptions {
   PresetOptions presets;
 };
 
+// The skin's surface figures are measured only when the bake writes figures (pipeline/bake.h measure_skin).
+bool skinFiguresWritten(const BakeCommandOptions& options) { return !options.stats_output.empty() || options.json; }
+
 // The figures on stderr: the bake, its error and where it peaks, volumes, roughness, creases, seams,
 // legs, jiggles and VRM constraints.
 void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out) {
@@ -139,7 +142,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << bake.quality.joint_regions[joint_region] << "' in '" << joint_clip->clip << "', " << 100.0 * loss.loss
               << " points (input skinning " << 100.0 * loss.input << " %, rig " << 100.0 * loss.rig << " %, volume about the joint)\n";
   }
-  if (!options.json && options.stats_output.empty() && !bake.quality.clips.empty()) {
+  if (!skinFiguresWritten(options) && !bake.quality.clips.empty()) {
     std::cerr << "skin figures (seams, roughness, creases, joint regions, centres of rotation): not measured; --stats or "
                  "--json measures them here, `rigbake validate` in the baked file\n";
   }
@@ -204,7 +207,7 @@ app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const Progress
   bake.fit.smoothness_weight = options.fit_smoothness;
   parseMuscleMotion(options.muscle_motion, &bake.motion);
   bake.helper_joints = options.helper_joints;
-  bake.measure_skin = !options.stats_output.empty() || options.json;
+  bake.measure_skin = skinFiguresWritten(options);
   request.progress = progress;
   request.notes = printNotesOf(options.character);
   return request;

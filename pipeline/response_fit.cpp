@@ -20,6 +20,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
 #include "pipeline/response_layout.h"
+#include "pipeline/surface_graph.h"
 
 namespace rigbake {
 namespace {
@@ -59,6 +60,9 @@ struct MuscleKeyMotion {
   Eigen::Vector3d up_axis = Eigen::Vector3d::Zero(), side_axis = Eigen::Vector3d::Zero();
   double up[kKeys] = {}, side[kKeys] = {}, scale[kKeys] = {};
 };
+
+// Whether key k moves the muscle's skin at this pose: most keys' hat weights are zero at any one pose.
+bool keyMoves(const MuscleKeyMotion& motion, int k) { return motion.up[k] != 0.0 || motion.side[k] != 0.0 || motion.scale[k] != 0.0; }
 
 // One muscle's share of a Jacobian row being built: the sums of w g . u, w g . s and of their
 // combination along the scale's direction over the row's vertices of the muscle.
@@ -118,10 +122,10 @@ struct FitProblem {
   const FitSurfaces& surfaces;
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
-  // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece (CSR).
-  const std::vector<std::vector<int>>& ring_first;
-  const std::vector<std::vector<int>>& ring;
-  double roughness_scale;  // options.smoothness_weight / sqrt(the fitted vertices of every part)
+  // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
+  // when there is no smoothness term.
+  const std::vector<std::vector<std::vector<int>>>& rings;
+  double roughness_scale;  // options.smoothness_weight / sqrt(the fitted vertices of every part); 0: no term
 };
 
 // One pose's share of the model (joined in pose order, so any thread count gives the same system).
@@ -361,10 +365,7 @@ void PoseRowBuilder::addSkinFloorHinges(const RigEvaluation& evaluation, bool me
   const ResponseFitOptions& options = problem_.options;
   const FitSurfaces& surfaces = problem_.surfaces;
   const ResponseLayout& layout = problem_.layout;
-  const int joint_count = problem_.skeleton.size();
   const size_t muscle_count = problem_.muscles.parts.size();
-  for (size_t m = 0; m < muscle_count; ++m)
-    s_.apart[m] = s_.frame[joint_count + m].matrix() - s_.frame[problem_.frames.carrier_of[m]].matrix();
   for (size_t p = 0; p < surfaces.parts.size(); ++p) {
     const FitPart& part = surfaces.parts[p];
     s_.moved[p].resize(part.moving_vertices.size());
@@ -408,11 +409,8 @@ void PoseRowBuilder::addSkinFloorHinges(const RigEvaluation& evaluation, bool me
 void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
   const FitSurfaces& surfaces = problem_.surfaces;
   const ResponseLayout& layout = problem_.layout;
-  const int joint_count = problem_.skeleton.size();
   const size_t muscle_count = problem_.muscles.parts.size();
   const int unknowns = layout.unknowns();
-  for (size_t m = 0; m < muscle_count; ++m)
-    s_.apart[m] = s_.frame[joint_count + m].matrix() - s_.frame[problem_.frames.carrier_of[m]].matrix();
   if (!measure_only) {
     s_.local_unknown.assign(static_cast<size_t>(unknowns), -1);
     for (size_t m = 0; m < muscle_count; ++m) {
@@ -421,7 +419,7 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
       const MuscleKeyMotion& motion = s_.key_motion[m];
       for (int k = 0; k < kKeys; ++k) {
         const int u = kind * kKeys + k;
-        if ((motion.up[k] == 0.0 && motion.side[k] == 0.0 && motion.scale[k] == 0.0) || s_.local_unknown[u] >= 0) continue;
+        if (!keyMoves(motion, k) || s_.local_unknown[u] >= 0) continue;
         s_.local_unknown[u] = static_cast<int>(out->rough_unknowns.size());
         out->rough_unknowns.push_back(u);
       }
@@ -444,18 +442,17 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
         sum += mv->weight * (s_.apart[mv->muscle] * bind).head<3>();
       move[c] = sum;
     }
-    const std::vector<int>& first = problem_.ring_first[p];
-    const std::vector<int>& ring = problem_.ring[p];
+    const std::vector<std::vector<int>>& rings = problem_.rings[p];
     for (int v : part.patches[0].fitted) {
-      const int begin = first[static_cast<size_t>(v)], end = first[static_cast<size_t>(v) + 1];
-      if (begin == end) continue;
+      const std::vector<int>& ring = rings[static_cast<size_t>(v)];
+      if (ring.empty()) continue;
       Eigen::Vector3d n = s_.normals[p][v];
       const double length = n.norm();
       if (!(length > 0.0)) continue;
       n /= length;
-      const double share = 1.0 / (end - begin);
+      const double share = 1.0 / static_cast<double>(ring.size());
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (int k = begin; k < end; ++k) mean += move[static_cast<size_t>(ring[k])];
+      for (int u : ring) mean += move[static_cast<size_t>(u)];
       const double scale = problem_.roughness_scale;
       const double residual = scale * (move[v] - share * mean).dot(n);
       out->rough_square += residual * residual;
@@ -470,7 +467,7 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
         addVertex(part, c, n, factor);
       };
       touch(v, 1.0);
-      for (int k = begin; k < end; ++k) touch(ring[k], -share);
+      for (int u : ring) touch(u, -share);
       index.clear();
       value.clear();
       for (int m : s_.touched_muscles) {
@@ -480,8 +477,7 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
         const int kind = layout.kind[m];
         if (kind >= 0) {
           for (int k = 0; k < kKeys; ++k) {
-            // A key whose hat weight is zero at this pose (most of them) has no entry.
-            if (motion.up[k] == 0.0 && motion.side[k] == 0.0 && motion.scale[k] == 0.0) continue;
+            if (!keyMoves(motion, k)) continue;  // not among the pose's rough_unknowns
             const double entry = scale * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale);
             const int u = s_.local_unknown[kind * kKeys + k];
             auto at = std::find(index.begin(), index.end(), u);
@@ -531,6 +527,13 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
     model.rows.push_back(takeRow(body_weight));
   }
   addRegionHinges(region_volume, measure_only, out);
+  if (options.skin_weight > 0.0 || problem_.roughness_scale > 0.0) {
+    // Both the skin floors and the smoothness term read the rig's move against the input skinning,
+    // through each muscle's skinning matrix less its carrier's.
+    const int joint_count = problem_.skeleton.size();
+    for (size_t m = 0; m < problem_.muscles.parts.size(); ++m)
+      s_.apart[m] = s_.frame[joint_count + m].matrix() - s_.frame[problem_.frames.carrier_of[m]].matrix();
+  }
   if (options.skin_weight > 0.0) addSkinFloorHinges(evaluation, measure_only, out);
   if (problem_.roughness_scale > 0.0) addRoughness(measure_only, out);
 }
@@ -690,31 +693,21 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   prior.scale.resize(layout.unknowns());
   for (int u = 0; u < layout.unknowns(); ++u) prior.scale[u] = std::max(reach[u], 1e-3);
 
-  // Each moving vertex's one-ring over the whole surface's moving piece, for the smoothness term.
-  std::vector<std::vector<int>> ring_first(surfaces.parts.size()), ring(surfaces.parts.size());
-  size_t fitted_vertices = 0;
-  for (size_t p = 0; p < surfaces.parts.size(); ++p) {
-    const FitPart& part = surfaces.parts[p];
-    std::vector<std::set<int>> neighbours(part.moving_vertices.size());
-    if (part.patches[0].first_vertex >= 0) {
-      for (const auto& t : part.patches[0].moving.triangles)
-        for (int a = 0; a < 3; ++a) {
-          neighbours[static_cast<size_t>(t[a])].insert(t[(a + 1) % 3]);
-          neighbours[static_cast<size_t>(t[a])].insert(t[(a + 2) % 3]);
-        }
-      fitted_vertices += part.patches[0].fitted.size();
+  // The smoothness term's one-rings, over the whole surface's moving piece: only when there is the term.
+  std::vector<std::vector<std::vector<int>>> rings;
+  double roughness_scale = 0.0;
+  if (options.smoothness_weight > 0.0) {
+    size_t fitted_vertices = 0;
+    for (const FitPart& part : surfaces.parts) {
+      const bool any = part.patches[0].first_vertex >= 0;
+      rings.push_back(oneRings(any ? part.patches[0].moving.triangles : std::vector<std::array<int, 3>>{}, part.moving_vertices.size()));
+      if (any) fitted_vertices += part.patches[0].fitted.size();
     }
-    ring_first[p].push_back(0);
-    for (const std::set<int>& around : neighbours) {
-      ring[p].insert(ring[p].end(), around.begin(), around.end());
-      ring_first[p].push_back(static_cast<int>(ring[p].size()));
-    }
+    if (fitted_vertices > 0) roughness_scale = options.smoothness_weight / std::sqrt(static_cast<double>(fitted_vertices));
   }
-  const double roughness_scale =
-      fitted_vertices > 0 ? options.smoothness_weight / std::sqrt(static_cast<double>(fitted_vertices)) : 0.0;
   const FitProblem problem{skeleton, *muscles, layout, options, frames, surfaces, fixed,
                            options.compressed_in_share * muscles->body_height, options.stretch_hollow_share * muscles->body_height,
-                           options.skin_band_share * muscles->body_height, ring_first, ring, roughness_scale};
+                           options.skin_band_share * muscles->body_height, rings, roughness_scale};
   std::vector<PoseScratch> scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (PoseScratch& worker : scratch) worker = poseScratch(surfaces.parts, muscle_count);
   std::vector<double> rms(static_cast<size_t>(options.iterations) + 1, 0.0);

@@ -9,6 +9,7 @@
 #include "pipeline/parallel.h"
 #include "pipeline/skin_volume.h"
 #include "pipeline/skinning.h"
+#include "pipeline/surface_graph.h"
 
 namespace rigbake {
 namespace {
@@ -55,17 +56,7 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
   SurfacePart part;
   part.surface = buildVolumeSurface(mesh, weld_tolerance);
   const size_t welded_count = static_cast<size_t>(part.surface.weldedCount());
-  part.ring.resize(welded_count);
-  for (const auto& triangle : part.surface.whole.triangles) {
-    for (int k = 0; k < 3; ++k) {
-      part.ring[static_cast<size_t>(triangle[k])].push_back(triangle[(k + 1) % 3]);
-      part.ring[static_cast<size_t>(triangle[k])].push_back(triangle[(k + 2) % 3]);
-    }
-  }
-  for (std::vector<int>& ring : part.ring) {
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-  }
+  part.ring = oneRings(part.surface.whole.triangles, welded_count);
   part.centres = optimizedRotationCentres(mesh, weights.input, threads);
   const int in_slots = weights.input.slots_per_vertex, rig_slots = weights.rig.slots_per_vertex;
   for (size_t w = 0; w < welded_count; ++w) {

@@ -57,4 +57,19 @@ SurfaceGraph buildSurfaceGraph(const MeshPart& part, double weld_tolerance) {
   return graph;
 }
 
+std::vector<std::vector<int>> oneRings(const std::vector<std::array<int, 3>>& triangles, size_t vertex_count) {
+  std::vector<std::vector<int>> rings(vertex_count);
+  for (const auto& triangle : triangles) {
+    for (int k = 0; k < 3; ++k) {
+      rings[static_cast<size_t>(triangle[k])].push_back(triangle[(k + 1) % 3]);
+      rings[static_cast<size_t>(triangle[k])].push_back(triangle[(k + 2) % 3]);
+    }
+  }
+  for (std::vector<int>& ring : rings) {
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  }
+  return rings;
+}
+
 }  // namespace rigbake

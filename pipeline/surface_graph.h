@@ -3,6 +3,7 @@
 // shares a triangle edge with.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -21,5 +22,10 @@ struct SurfaceGraph {
 // Vertices closer than `weld_tolerance` (scene units, per axis after rounding to that grid) are one,
 // numbered in the order of their first vertex. Triangles that welding makes degenerate add no edge.
 SurfaceGraph buildSurfaceGraph(const MeshPart& part, double weld_tolerance);
+
+// Each of `vertex_count` vertices' one-ring over `triangles` (indices into those vertices), ascending:
+// the vertices it shares a triangle with. The roughness figure's umbrella Laplacian and the response
+// fit's smoothness term take their means over these.
+std::vector<std::vector<int>> oneRings(const std::vector<std::array<int, 3>>& triangles, size_t vertex_count);
 
 }  // namespace rigbake
