@@ -181,7 +181,8 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
 // (The fields app::bakeJob and bakeCharacter name in an InvalidOption, and "map", which a landmark that
 // does not resolve asks for in a FixableByOption.)
 const std::vector<FlagName> kBakeFlags = {{"influences", "--influences"}, {"fps", "--fps"}, {"hits", "--hits"},
-                                          {"springs_only", "--vrm-springs-only"}, {"map", "--map"}};
+                                          {"springs_only", "--vrm-springs-only"}, {"map", "--map"},
+                                          {"fit_poses", "--fit-poses"}, {"fit_smoothness", "--fit-smoothness"}};
 
 app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const ProgressReport& progress) {
   app::BakeRequest request;

@@ -255,6 +255,12 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   if (!isPackedInfluenceCount(options.influences))
     failOption("influences", "must be 4, 7 or 10 (got " + std::to_string(options.influences) + ")");
   if (options.fps < 0) failOption("fps", "must be positive, or 0 for the clips' own key times");
+  // The same ranges the command line and the build manifest take: a library caller (app/, bench/) gets
+  // the refusal they would, not a fit over no poses or a term that pulls the wrong way.
+  if (options.fit.max_poses < 1 || options.fit.max_poses > 100000)
+    failOption("fit_poses", "must be from 1 to 100000 (got " + std::to_string(options.fit.max_poses) + ")");
+  if (!(options.fit.smoothness_weight >= 0.0 && options.fit.smoothness_weight <= 1e6))
+    failOption("fit_smoothness", "must be from 0 to 1000000 per metre");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);

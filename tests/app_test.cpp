@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <thread>
 
@@ -55,6 +56,14 @@ TEST_CASE("app: bakeJob names a bad option by its field, never by a command-line
   request = quickSampleBake();
   request.options.fps = -1.0;
   CHECK(invalidOption(request) == "fps: must be positive, or 0 for the clips' own key times");
+  request = quickSampleBake();
+  request.options.fit.max_poses = 0;
+  CHECK(invalidOption(request) == "fit_poses: must be from 1 to 100000 (got 0)");
+  request = quickSampleBake();
+  request.options.fit.smoothness_weight = -1.0;
+  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre");
+  request.options.fit.smoothness_weight = std::numeric_limits<double>::quiet_NaN();
+  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre");
   request = quickSampleBake();
   request.hits = test::presetsDir() + "/jiggle/biceps.json";  // never read: the check comes first
   CHECK(invalidOption(request) == "hits: needs a jiggle preset: hits kick jiggle joints");

@@ -220,6 +220,16 @@ TEST_CASE("cli bake: bad input gives one line, a stable code, and no output file
     CHECK(lineCount(r.err) == 1);
     CHECK(r.err.find("--gltf-weights") != std::string::npos);
   }
+  SECTION("--fit-smoothness -1 and --fit-poses 0") {
+    for (const char* flag : {"--fit-smoothness -1", "--fit-poses 0"}) {
+      CliResult r = bake(sampleGlbPathForCli() + " " + flag);
+      INFO(flag << ": " << r.err);
+      CHECK(r.exit_code == 1);
+      CHECK(r.err.rfind("USAGE", 0) == 0);
+      CHECK(lineCount(r.err) == 1);
+      CHECK(r.err.find(std::string(flag).substr(0, std::string(flag).find(' '))) != std::string::npos);
+    }
+  }
   SECTION("muscle JSON made for another character") {
     std::string cesium = requireAsset("CesiumMan.glb");
     if (cesium.empty()) return;

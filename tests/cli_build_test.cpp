@@ -322,6 +322,10 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
       {{{"out", "out"}, {"regions", "no_such_regions"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
        "#/regions"},
       {{{"out", "out"}, {"fit_poses", 0}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/fit_poses"},
+      {{{"out", "out"}, {"fit_smoothness", -3}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
+       "#/fit_smoothness"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_smoothness", "smooth"}}}}},
+       "#/characters/0/fit_smoothness"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fps", -1}}}}}, "#/characters/0/fps"},
   };
   for (const Case& c : cases) {
