@@ -319,13 +319,13 @@ size_t sampleIndex(const MeasuredClip& clip, double time) {
 // Seen across the subject's long axis (a limb from the side, not end on). When the skin around it lies
 // in a plane (a bent elbow, a raised arm against the torso), from that plane's normal, so the bend
 // shows; otherwise from where the subject's skin faces (a muscle's patch), else from the front.
-Camera pictureCamera(const LandmarkSet& landmarks, const std::vector<std::vector<Eigen::Vector3d>>& rig,
+Camera pictureCamera(const LandmarkSet& landmarks, const std::vector<std::vector<Eigen::Vector3d>>& skin,
                      const std::function<bool(size_t, int)>& subject, const Eigen::Vector3d& centre, const Eigen::Vector3d& facing,
                      int count, double radius) {
   Eigen::Matrix3d spread = Eigen::Matrix3d::Zero(), around = Eigen::Matrix3d::Zero();
-  for (size_t p = 0; p < rig.size(); ++p) {
-    for (size_t w = 0; w < rig[p].size(); ++w) {
-      const Eigen::Vector3d d = rig[p][w] - centre;
+  for (size_t p = 0; p < skin.size(); ++p) {
+    for (size_t w = 0; w < skin[p].size(); ++w) {
+      const Eigen::Vector3d d = skin[p][w] - centre;
       if (subject(p, static_cast<int>(w))) spread += d * d.transpose();
       if (d.norm() <= 1.5 * radius) around += d * d.transpose();
     }
@@ -375,7 +375,7 @@ bool drawPicture(const PictureScene& scene, const PictureRequest& request, Quali
     for (size_t w = 0; w < input[p].size(); ++w) {
       along[p][w] = (rig[p][w] - input[p][w]).dot(normals[p][w]);
       if (!subject(p, static_cast<int>(w))) continue;
-      centre += rig[p][w];
+      centre += input[p][w];
       facing += normals[p][w];
       ++count;
     }
@@ -391,12 +391,15 @@ bool drawPicture(const PictureScene& scene, const PictureRequest& request, Quali
   for (size_t p = 0; p < drawn.size(); ++p) {
     for (size_t w = 0; w < rig[p].size(); ++w) {
       if (!subject(p, static_cast<int>(w))) continue;
-      radius = std::max(radius, (rig[p][w] - centre).norm());
+      radius = std::max(radius, (input[p][w] - centre).norm());
       picture.max_out = std::max(picture.max_out, along[p][w]);
       picture.max_in = std::max(picture.max_in, -along[p][w]);
     }
   }
-  const Camera camera = pictureCamera(landmarks, rig, subject, centre, facing, count, radius);
+  // Framed on the input skinning, never the rig: every bake of one character then shows a crease or a
+  // muscle from the same camera, so two reports (say with and without --fit-smoothness) compare side by
+  // side. The 1.3x margin keeps the rig's bulges in the frame.
+  const Camera camera = pictureCamera(landmarks, input, subject, centre, facing, count, radius);
   picture.scale = std::max({picture.max_out, picture.max_in, 1e-4 * landmarks.body.height});
   std::vector<std::vector<Eigen::Vector3f>> colours(drawn.size());
   for (size_t p = 0; p < drawn.size(); ++p)
