@@ -89,6 +89,26 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
     if (clip.surface.measured) std::cerr << ", centres of rotation " << 100.0 * clip.surface.centre_of_rotation.change << " %";
     std::cerr << std::noshowpos << " (largest change against the bind pose)\n";
   }
+  // The occupied volume (each point inside the skin once): the rig against plain skinning over every
+  // clip, and the clip whose signed figure counts most of the rig's volume twice.
+  int occupied_clips = 0, occupied_better = 0, occupied_half = 0;
+  const ClipQuality* overstated = nullptr;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    if (!clip.surface.measured) continue;
+    const VolumeExtreme* occupied = clip.surface.occupied;
+    ++occupied_clips;
+    occupied_better += std::abs(occupied[3].change) < std::abs(occupied[0].change);
+    occupied_half += std::abs(occupied[3].change) <= 0.5 * std::abs(occupied[0].change);
+    auto gap = [](const ClipQuality& c) { return c.body.rig.change - c.surface.occupied[3].change; };
+    if (!overstated || gap(clip) > gap(*overstated)) overstated = &clip;
+  }
+  if (overstated) {
+    std::cerr << std::setprecision(3) << "occupied volume (each point inside the skin once, docs/deformation-quality.md): the rig changes it less than plain skinning on "
+              << occupied_better << " of " << occupied_clips << " clips, by at most half as much on " << occupied_half
+              << "; most counted twice in '" << overstated->clip << "': the rig's largest change " << std::showpos << 100.0 * overstated->body.rig.change
+              << " % signed, " << 100.0 * overstated->surface.occupied[3].change << " % occupied (plain skinning "
+              << 100.0 * overstated->surface.occupied[0].change << " %)" << std::noshowpos << "\n";
+  }
   const ClipQuality* roughest = nullptr;
   for (const ClipQuality& clip : bake.quality.clips) {
     if (!clip.surface.measured) continue;
@@ -143,7 +163,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << " points (input skinning " << 100.0 * loss.input << " %, rig " << 100.0 * loss.rig << " %, volume about the joint)\n";
   }
   if (!skinFiguresWritten(options) && !bake.quality.clips.empty()) {
-    std::cerr << "skin figures (seams, roughness, creases, joint regions, centres of rotation): not measured; --stats or "
+    std::cerr << "skin figures (seams, roughness, occupied volume, creases, joint regions, centres of rotation): not measured; --stats or "
                  "--json measures them here, `rigbake validate` in the baked file\n";
   }
   if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
@@ -253,7 +273,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       "and as packed buffers (docs/packed-influences.md). By default the muscles move at run time from the "
       "RIGBAKE_muscle_rig extension, adding no animation data (docs/runtime.md). Reports the weights' deformation "
       "error in mm and the volume per clip against plain and dual-quaternion skinning (--stats for every body "
-      "region and the skin's figures: seams, roughness, creases, joint regions, centres of rotation, which also "
+      "region and the skin's figures: seams, roughness, occupied volume, creases, joint regions, centres of rotation, which also "
       "print their worst case here; `rigbake validate` checks them in the baked file).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
@@ -280,9 +300,10 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
   command->add_option("--stats", options->stats_output,
                       "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
-                      "body region, bytes per vertex, and the skin's: seams, roughness, creases and joint regions against "
-                      "plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for standard output. The skin's "
-                      "figures cost more than the rest of the bake: a bake without --stats or --json skips them");
+                      "body region, bytes per vertex, and the skin's: seams, roughness, occupied volume, creases and "
+                      "joint regions against plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for "
+                      "standard output. The skin's figures cost more than the rest of the bake: a bake without --stats "
+                      "or --json skips them");
   command->add_option("--response", options->response,
                       "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "
                       "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "

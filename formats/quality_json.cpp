@@ -53,7 +53,12 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     surface_clips[clip.clip] = {{"roughness_rise_p95_mm",
                                  {{"input", 1000.0 * rise[0]}, {"dual_quaternion", 1000.0 * rise[1]},
                                   {"centre_of_rotation", 1000.0 * rise[2]}, {"rig", 1000.0 * rise[3]}}},
-                                {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)}};
+                                {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)},
+                                {"occupied_volume",
+                                 {{"input", extremeJson(clip.surface.occupied[0])},
+                                  {"dual_quaternion", extremeJson(clip.surface.occupied[1])},
+                                  {"centre_of_rotation", extremeJson(clip.surface.occupied[2])},
+                                  {"rig", extremeJson(clip.surface.occupied[3])}}}};
   }
   nlohmann::json crease_clips = nlohmann::json::object();
   for (const ClipQuality& clip : quality.clips) {

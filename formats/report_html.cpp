@@ -591,7 +591,8 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
                      "Largest volume change against the bind pose over each clip, in percent, of the input skinning "
                      "(the file's weights with each muscle joint's weight returned to its carrier), of dual-quaternion "
                      "skinning of those weights, and of the baked rig as an engine evaluates it "
-                     "(docs/deformation-quality.md). Regions are closed by capping their holes.</p>\n";
+                     "(docs/deformation-quality.md). Regions are closed by capping their holes. The occupied row counts each point "
+                     "inside the skin once, where the signed volume counts skin pushed through opposing skin twice.</p>\n";
   if (!baked.measured) return html + "<p class=\"note\">Not measured: " + esc(baked.skip_reason) + "</p>\n</section>\n";
   const DeformationQuality& quality = baked.quality;
   html += "<table class=\"quality\"><tr><th>clip</th><th>region</th><th>input %</th><th>dual quaternion %</th><th>rig %</th></tr>\n";
@@ -603,6 +604,14 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
               percent(v.rig.change) + "</td></tr>\n";
     };
     row("whole body", clip.body);
+    // The same body counting each point inside the skin once: skin pushed through skin keeps nothing.
+    if (clip.surface.measured) {
+      SkinningVolumes occupied;
+      occupied.input = clip.surface.occupied[0];
+      occupied.dual_quaternion = clip.surface.occupied[1];
+      occupied.rig = clip.surface.occupied[3];
+      row("whole body, occupied", occupied);
+    }
     // The three regions where the rig departs most from the input skinning.
     std::vector<size_t> order(clip.regions.size());
     for (size_t r = 0; r < order.size(); ++r) order[r] = r;

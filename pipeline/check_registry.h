@@ -15,7 +15,7 @@ namespace rigbake {
 
 // Thresholds relative to body height keep one default meaningful for a 1.2 m robot and a 1.9 m
 // soldier, whatever the file's units.
-inline constexpr std::array<CheckDefinition, 20> kCheckDefinitions = {{
+inline constexpr std::array<CheckDefinition, 21> kCheckDefinitions = {{
     {"LANDMARKS_RESOLVED", Severity::kError, 0.0, Comparison::kAtMost, "landmarks",
      "Required canonical landmarks that match no joint and cannot be derived"},
     {"LOCATOR_SYMMETRY", Severity::kWarning, 0.02, Comparison::kAtMost, "x body height",
@@ -47,6 +47,8 @@ inline constexpr std::array<CheckDefinition, 20> kCheckDefinitions = {{
      "Largest ratio, per clip, of the rig's roughness rise over the bind pose (95th percentile of the moving skin) to the input skinning's"},
     {"SKIN_BODY_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
      "Largest amount by which the rig's whole-body volume change exceeds the input skinning's, per clip"},
+    {"SKIN_OCCUPIED_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
+     "Largest amount by which the rig's change of the space the skin occupies (each point once) exceeds the input skinning's, per clip"},
     {"MUSCLE_BULGE_OUTWARD", Severity::kWarning, -0.0005, Comparison::kAtLeast, "x body height",
      "Smallest mean move of a muscle's skin along the normal at its most compressed sample (positive: out)"},
     {"MUSCLE_STRETCH_NO_HOLLOW", Severity::kWarning, -0.001, Comparison::kAtLeast, "x body height",
@@ -64,7 +66,7 @@ inline constexpr std::array<CheckDefinition, 20> kCheckDefinitions = {{
 }};
 
 // Every check, in report order.
-constexpr const std::array<CheckDefinition, 20>& checkDefinitions() { return kCheckDefinitions; }
+constexpr const std::array<CheckDefinition, 21>& checkDefinitions() { return kCheckDefinitions; }
 
 // The index of `code` in the table, or the table's size when it is not there.
 constexpr size_t checkIndex(std::string_view code) {

@@ -76,6 +76,7 @@ CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const Validati
 CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkOccupiedVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleStretchNoHollow(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkRigExtensionMissing(const ValidationInputs& inputs, const ValidationConfig& config);

@@ -69,6 +69,10 @@ struct SurfaceFigures {
   // pose (|umbrella Laplacian . normal| posed minus bind), scene units; the largest over the samples.
   double roughness_rise[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation
+  // The whole body's change of occupied volume (pipeline/occupied_volume.h: each point inside the skin
+  // counted once, so skin pushed through opposing skin keeps nothing), per skinning as roughness_rise;
+  // the largest over the same samples.
+  VolumeExtreme occupied[kSurfaceSkinnings];
 };
 
 // Opposing skin at a crease (pipeline/crease_contact.h), one skinning at the crease's peak bend.

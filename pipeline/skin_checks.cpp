@@ -225,4 +225,30 @@ CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConf
   return result;
 }
 
+// The whole body's volume counting each point inside the skin once: the signed volume above counts skin
+// pushed into a fold twice, so a rig can keep it by swelling into the fold (docs/deformation-quality.md,
+// "Occupied volume").
+CheckResult checkOccupiedVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
+  CheckResult result = startCheck(checkAt<checkIndex("SKIN_OCCUPIED_VOLUME")>(), config);
+  if (const std::string why = qualitySkip(inputs); !why.empty()) return skippedCheck(result, why);
+  const DeformationQuality& quality = inputs.quality->quality;
+  CheckMeasurement measurement(&result);
+  int measured = 0;
+  for (const ClipQuality& clip : quality.clips) {
+    if (!clip.surface.measured) continue;
+    ++measured;
+    const VolumeExtreme* v = clip.surface.occupied;
+    measurement.add(100.0 * (std::abs(v[3].change) - std::abs(v[0].change)), clip.clip,
+                    "occupied volume input skinning " + fixedDecimals(100.0 * v[0].change, 2) + " %, dual quaternions " +
+                        fixedDecimals(100.0 * v[1].change, 2) + " %, centres of rotation " + fixedDecimals(100.0 * v[2].change, 2) +
+                        " %, rig " + fixedDecimals(100.0 * v[3].change, 2) + " % at " + fixedDecimals(v[3].time, 2) +
+                        " s (signed: input " + fixedDecimals(100.0 * clip.body.input.change, 2) + " %, rig " +
+                        fixedDecimals(100.0 * clip.body.rig.change, 2) + " %)");
+  }
+  if (measured == 0) return skippedCheck(result, "no clip was measured");
+  measurement.finish(std::to_string(measured) + " clips, rig against input skinning at most " + fixedDecimals(result.measured, 2) +
+                     " points");
+  return result;
+}
+
 }  // namespace rigbake
