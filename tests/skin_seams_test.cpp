@@ -193,6 +193,24 @@ TEST_CASE("seams: splitting a character into meshes leaves every vertex's muscle
   }
   CHECK(compared > whole.parts[0].full.vertexCount());  // border vertices counted in each of their pieces
   CHECK(largest < 1e-9);
+  // The occupied volume (pipeline/occupied_volume.h) of the pieces is nearly the whole's: windings add
+  // over the pieces, and only their holes' caps (each piece closed by a fan from its own loop's mean,
+  // where three pieces meet not the same fan as its neighbours') add or take a thin lens. The signed
+  // volume moves by the same lenses: the rig's ArmRaise 1.391 % whole, 1.453 % in pieces. Measured:
+  // the occupied figures within 0.03 points on every clip and skinning; a piece's interior caps counted
+  // as skin would put whole cross-sections of the limbs inside twice.
+  REQUIRE(whole.quality.clips.size() == pieces.quality.clips.size());
+  for (size_t c = 0; c < whole.quality.clips.size(); ++c) {
+    const SurfaceFigures& a = whole.quality.clips[c].surface;
+    const SurfaceFigures& b = pieces.quality.clips[c].surface;
+    REQUIRE(a.measured);
+    REQUIRE(b.measured);
+    for (int s = 0; s < kSurfaceSkinnings; ++s) {
+      INFO(whole.quality.clips[c].clip << " skinning " << s);
+      CHECK(b.occupied[s].change == Approx(a.occupied[s].change).margin(4e-4));
+      CHECK(b.occupied[s].time == a.occupied[s].time);
+    }
+  }
 }
 
 TEST_CASE("seams: cli bake reports the seams of a multi-mesh character and validate checks them (SKIN_SEAM_OPEN)") {
