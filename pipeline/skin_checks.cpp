@@ -188,25 +188,38 @@ CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationCon
 // it says nothing: the ratio is taken to at least this.
 constexpr double kRoughnessFloor = 1e-5;
 
-CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config) {
-  CheckResult result = startCheck(checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>(), config);
+// A per-clip check over the skin's surface figures, which only the clips with samples have:
+// `measure(clip, &measurement)` adds a clip's finding, `summary(clips, measured)` is the check's line.
+template <typename Measure, typename Summary>
+CheckResult surfaceCheck(const CheckDefinition& definition, const ValidationInputs& inputs, const ValidationConfig& config,
+                         Measure measure, Summary summary) {
+  CheckResult result = startCheck(definition, config);
   if (const std::string why = qualitySkip(inputs); !why.empty()) return skippedCheck(result, why);
-  const DeformationQuality& quality = inputs.quality->quality;
   CheckMeasurement measurement(&result);
   int measured = 0;
-  for (const ClipQuality& clip : quality.clips) {
+  for (const ClipQuality& clip : inputs.quality->quality.clips) {
     if (!clip.surface.measured) continue;
     ++measured;
-    const double* rise = clip.surface.roughness_rise;
-    measurement.add(rise[3] / std::max(rise[0], kRoughnessFloor), clip.clip,
-                    "roughness rise (95th percentile) input " + fixedDecimals(1000.0 * rise[0], 3) + " mm, dual quaternions " +
-                        fixedDecimals(1000.0 * rise[1], 3) + " mm, centres of rotation " + fixedDecimals(1000.0 * rise[2], 3) + " mm, rig " +
-                        fixedDecimals(1000.0 * rise[3], 3) + " mm");
+    measure(clip, &measurement);
   }
   if (measured == 0) return skippedCheck(result, "no clip was measured");
-  measurement.finish(std::to_string(measured) + " clips, the rig's roughness rise at most " + fixedDecimals(result.measured, 2) +
-                     " x the input skinning's");
+  measurement.finish(summary(measured, result.measured));
   return result;
+}
+
+CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config) {
+  return surfaceCheck(
+      checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>(), inputs, config,
+      [](const ClipQuality& clip, CheckMeasurement* measurement) {
+        const double* rise = clip.surface.roughness_rise;
+        measurement->add(rise[3] / std::max(rise[0], kRoughnessFloor), clip.clip,
+                         "roughness rise (95th percentile) input " + fixedDecimals(1000.0 * rise[0], 3) + " mm, dual quaternions " +
+                             fixedDecimals(1000.0 * rise[1], 3) + " mm, centres of rotation " + fixedDecimals(1000.0 * rise[2], 3) +
+                             " mm, rig " + fixedDecimals(1000.0 * rise[3], 3) + " mm");
+      },
+      [](int clips, double measured) {
+        return std::to_string(clips) + " clips, the rig's roughness rise at most " + fixedDecimals(measured, 2) + " x the input skinning's";
+      });
 }
 
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
@@ -229,26 +242,20 @@ CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConf
 // pushed into a fold twice, so a rig can keep it by swelling into the fold (docs/deformation-quality.md,
 // "Occupied volume").
 CheckResult checkOccupiedVolume(const ValidationInputs& inputs, const ValidationConfig& config) {
-  CheckResult result = startCheck(checkAt<checkIndex("SKIN_OCCUPIED_VOLUME")>(), config);
-  if (const std::string why = qualitySkip(inputs); !why.empty()) return skippedCheck(result, why);
-  const DeformationQuality& quality = inputs.quality->quality;
-  CheckMeasurement measurement(&result);
-  int measured = 0;
-  for (const ClipQuality& clip : quality.clips) {
-    if (!clip.surface.measured) continue;
-    ++measured;
-    const VolumeExtreme* v = clip.surface.occupied;
-    measurement.add(100.0 * (std::abs(v[3].change) - std::abs(v[0].change)), clip.clip,
-                    "occupied volume input skinning " + fixedDecimals(100.0 * v[0].change, 2) + " %, dual quaternions " +
-                        fixedDecimals(100.0 * v[1].change, 2) + " %, centres of rotation " + fixedDecimals(100.0 * v[2].change, 2) +
-                        " %, rig " + fixedDecimals(100.0 * v[3].change, 2) + " % at " + fixedDecimals(v[3].time, 2) +
-                        " s (signed: input " + fixedDecimals(100.0 * clip.body.input.change, 2) + " %, rig " +
-                        fixedDecimals(100.0 * clip.body.rig.change, 2) + " %)");
-  }
-  if (measured == 0) return skippedCheck(result, "no clip was measured");
-  measurement.finish(std::to_string(measured) + " clips, rig against input skinning at most " + fixedDecimals(result.measured, 2) +
-                     " points");
-  return result;
+  return surfaceCheck(
+      checkAt<checkIndex("SKIN_OCCUPIED_VOLUME")>(), inputs, config,
+      [](const ClipQuality& clip, CheckMeasurement* measurement) {
+        const VolumeExtreme* v = clip.surface.occupied;
+        measurement->add(100.0 * (std::abs(v[3].change) - std::abs(v[0].change)), clip.clip,
+                         "occupied volume input skinning " + fixedDecimals(100.0 * v[0].change, 2) + " %, dual quaternions " +
+                             fixedDecimals(100.0 * v[1].change, 2) + " %, centres of rotation " + fixedDecimals(100.0 * v[2].change, 2) +
+                             " %, rig " + fixedDecimals(100.0 * v[3].change, 2) + " % at " + fixedDecimals(v[3].time, 2) +
+                             " s (signed: input " + fixedDecimals(100.0 * clip.body.input.change, 2) + " %, rig " +
+                             fixedDecimals(100.0 * clip.body.rig.change, 2) + " %)");
+      },
+      [](int clips, double measured) {
+        return std::to_string(clips) + " clips, rig against input skinning at most " + fixedDecimals(measured, 2) + " points";
+      });
 }
 
 }  // namespace rigbake
