@@ -45,6 +45,7 @@ std::string bakeOnlyOptions(const BuildCharacter& character) {
   if (character.fit_poses != ResponseFitOptions{}.max_poses) text += " fit_poses " + std::to_string(character.fit_poses);
   if (character.fit_smoothness != ResponseFitOptions{}.smoothness_weight)
     text += " fit_smoothness " + std::to_string(character.fit_smoothness);
+  if (character.fit_occupied_volume) text += " fit_volume occupied";
   if (character.stats) text += " stats";
   if (character.packed) text += " packed";
   return text;
@@ -138,6 +139,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   options.response = character.response;
   options.fit.max_poses = character.fit_poses;
   options.fit.smoothness_weight = character.fit_smoothness;
+  options.fit.occupied_volume = character.fit_occupied_volume;
   options.motion = character.muscle_motion;
   options.helper_joints = character.helper_joints;
   options.measure_skin = character.stats;  // only the stats show them (pipeline/bake.h)

@@ -25,7 +25,7 @@ struct BuildCharacter {
   ResponseMode response = ResponseMode::kAuto;
   int vrm = -1;              // "vrm": VRM version to write (0 or 1, as rigbake bake --vrm), -1 as the input is
   // What `rigbake bake` does with --map, --regions, --jiggle, --hits, --vrm-springs-only, --fps,
-  // --fit-poses, --fit-smoothness, --stats and --packed-out (docs/build.md).
+  // --fit-poses, --fit-smoothness, --fit-volume, --stats and --packed-out (docs/build.md).
   std::string map;           // a naming map file (resolved) or a shipped map's name; empty: detected
   std::string regions;       // region preset file (resolved); empty: the shipped "body"
   std::string jiggle;        // jiggle preset file (resolved), or empty
@@ -34,6 +34,7 @@ struct BuildCharacter {
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
+  bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;  // "fit_volume": "occupied"
   bool stats = false;        // also write OUT/NAME/stats.json
   bool packed = false;       // also write OUT/NAME/NAME.rbpk
   std::string pointer;       // JSON pointer in the manifest, for messages
@@ -55,6 +56,7 @@ struct BuildManifest {
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
+  bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;
   bool stats = false, packed = false;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;

@@ -3,7 +3,9 @@
 
 #include <algorithm>
 #include <cassert>
+#include <limits>
 
+#include "pipeline/occupied_volume.h"
 #include "pipeline/parallel.h"
 
 namespace rigbake {
@@ -275,8 +277,24 @@ struct PoseOnlyScratch {
   std::vector<Eigen::Affine3d> frame;
   FloatSkinFrame float_frame;
   std::vector<double> volume;
-  std::vector<Eigen::Vector3d> input, welded;
+  std::vector<Eigen::Vector3d> input;
+  std::vector<std::vector<Eigen::Vector3d>> parts_welded;  // every part's, for the exposure
 };
+
+// The grid of the fit's exposure: columns across the bind body, a 128th of its largest extent apart.
+// The exposure only sorts the skin into inside and outside of the folds, so it is coarser than the
+// figures' grid (256): at 128 it adds 0.09 s to Cyberpunk's first bake.
+OccupancyGrid fitOccupancyGrid(const FitSurfaces& s) {
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  for (const FitPart& part : s.parts) {
+    for (size_t l = 0; l < part.welded_of_lane.size(); ++l) {
+      if (part.welded_of_lane[l] < 0) continue;
+      low = low.cwiseMin(part.welded_bind[l]);
+      high = high.cwiseMax(part.welded_bind[l]);
+    }
+  }
+  return occupancyGrid(low, high, 128.0);
+}
 
 }  // namespace
 
@@ -344,13 +362,15 @@ void skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluati
 }
 
 FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>& poses, const runtime::MuscleRig<double>& rig,
-                               const std::vector<Eigen::Affine3d>& bind_inverse, int threads, FitSurfaces* surfaces) {
+                               const std::vector<Eigen::Affine3d>& bind_inverse, bool exposure, int threads, FitSurfaces* surfaces) {
   const FitSurfaces& s = *surfaces;
   const int region_count = s.region_count;
   const size_t patch_count = s.patch_count;
   FixedPieces out;
   out.input_region_change.assign(poses.size(), std::vector<double>(region_count, 0.0));
   out.volume.assign(poses.size(), std::vector<FixedVolume>(s.parts.size() * patch_count));
+  const OccupancyGrid grid = exposure ? fitOccupancyGrid(s) : OccupancyGrid{};
+  if (grid.step > 0.0) out.exposure.resize(poses.size());
   std::vector<PoseOnlyScratch> scratches(parallelWorkerCount(threads, poses.size(), 1));
   parallelForWorkers(threads, poses.size(), 1, [&](size_t worker, size_t, size_t i, size_t) {
     PoseOnlyScratch& scratch = scratches[worker];
@@ -359,9 +379,11 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
     prepareFloatSkinFrame(scratch.frame, s.skin_centre, 0, s.no_pivots, &scratch.float_frame);
     std::vector<double>& volume = scratch.volume;
     volume.assign(region_count, 0.0);
-    std::vector<Eigen::Vector3d>&input = scratch.input, &welded = scratch.welded;
+    scratch.parts_welded.resize(s.parts.size());
+    std::vector<Eigen::Vector3d>& input = scratch.input;
     for (size_t p = 0; p < s.parts.size(); ++p) {
       const FitPart& part = s.parts[p];
+      std::vector<Eigen::Vector3d>& welded = scratch.parts_welded[p];
       const std::vector<int>& vertex_of_weld = s.measured.surfaces[p].vertex_of_weld;
       input.resize(vertex_of_weld.size());
       welded.resize(vertex_of_weld.size());
@@ -380,6 +402,19 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
       }
     }
     for (int r = 0; r < region_count; ++r) out.input_region_change[i][r] = signedChange(volume[r], s.bind_region[r]);
+    if (out.exposure.empty()) return;
+    // Every part at once: skin is inside skin of any part.
+    std::vector<PosedPatch> posed;
+    for (size_t p = 0; p < s.parts.size(); ++p) posed.push_back({&s.measured.surfaces[p].whole, &scratch.parts_welded[p]});
+    const std::vector<std::vector<float>> share = exposedShare(posed, grid.axis, grid.step);
+    out.exposure[i].resize(s.parts.size());
+    for (size_t p = 0; p < s.parts.size(); ++p) {
+      const std::vector<int>& moving = s.parts[p].moving_vertices;
+      const std::vector<int>& weld_of_vertex = s.measured.surfaces[p].weld_of_vertex;
+      std::vector<float>& e = out.exposure[i][p];
+      e.resize(moving.size());
+      for (size_t c = 0; c < moving.size(); ++c) e[c] = share[p][static_cast<size_t>(weld_of_vertex[static_cast<size_t>(moving[c])])];
+    }
   });
   surfaces->measured = MeasuredSurfaces{};
   for (FitPart& part : surfaces->parts) {

@@ -138,13 +138,17 @@ void skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluati
 struct FixedPieces {
   std::vector<std::vector<double>> input_region_change;  // [pose][region]
   std::vector<std::vector<FixedVolume>> volume;          // [pose][part * patch_count + patch]
+  // With ResponseFitOptions::occupied_volume: per pose, part and moving vertex, the share of its skin
+  // that bounds the occupied space under the starting rig (pipeline/occupied_volume.h exposedShare());
+  // empty otherwise.
+  std::vector<std::vector<std::vector<float>>> exposure;
 };
 
 // One pass over the poses with `rig` (any response) for FixedPieces; then frees what the iterations do
 // not need (the welded surfaces, their batch, the input's region patches and the fixed pieces: 16 MB
 // of the fit at 100k vertices, which was the bake's peak).
 FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>& poses, const runtime::MuscleRig<double>& rig,
-                               const std::vector<Eigen::Affine3d>& bind_inverse, int threads, FitSurfaces* surfaces);
+                               const std::vector<Eigen::Affine3d>& bind_inverse, bool exposure, int threads, FitSurfaces* surfaces);
 
 // Positions p + offset in double from a batch's single-precision offsets (set `set`), into
 // (*posed)[index_of_lane[lane]]: the bind position (bind_of_lane, in lane order) keeps its digits and

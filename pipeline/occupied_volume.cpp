@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <cstdint>
 #include <utility>
 
@@ -14,6 +15,7 @@ struct Crossing {
   std::int64_t i, j;
   double depth;
   int delta;
+  int surface = -1, triangle = -1;  // -1: a hole's cap
 };
 
 struct Point2 {
@@ -44,7 +46,7 @@ struct Edge {
 };
 
 void addTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, int axis, double step,
-                 std::vector<Crossing>* out) {
+                 std::vector<Crossing>* out, int surface, int triangle) {
   const int iu = (axis + 1) % 3, iv = (axis + 2) % 3;
   const Point2 pa{a[iu], a[iv]}, pb{b[iu], b[iv]}, pc{c[iu], c[iv]};
   // Most triangles of a fine mesh cover no column centre: the columns first.
@@ -68,35 +70,52 @@ void addTriangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen
       // Barycentric coordinates of x in the original corner order: the depth of the plane there.
       const double lb = ((x.u - pa.u) * (pc.v - pa.v) - (x.v - pa.v) * (pc.u - pa.u)) / facing;
       const double lc = ((pb.u - pa.u) * (x.v - pa.v) - (pb.v - pa.v) * (x.u - pa.u)) / facing;
-      out->push_back({i, j, a[axis] + lb * (b[axis] - a[axis]) + lc * (c[axis] - a[axis]), delta});
+      out->push_back({i, j, a[axis] + lb * (b[axis] - a[axis]) + lc * (c[axis] - a[axis]), delta, surface, triangle});
     }
   }
 }
 
-}  // namespace
+// One crossing within its column: its depth, winding step, and the triangle it crosses (surface -1 for a
+// hole's cap).
+struct ColumnCrossing {
+  double depth;
+  int delta, surface, triangle;
+  bool operator<(const ColumnCrossing& o) const {
+    if (depth != o.depth) return depth < o.depth;
+    if (delta != o.delta) return delta < o.delta;
+    if (surface != o.surface) return surface < o.surface;
+    return triangle < o.triangle;
+  }
+};
 
-double windingExcess(const std::vector<PosedPatch>& surfaces, int axis, double step) {
-  // Kept between calls on each thread: a bake measures hundreds of poses.
+// Every column's crossings with every triangle and hole cap of `surfaces`, grouped by column with a
+// counting sort (a global sort of every crossing took most of a bake's figures), columns in (i, j)
+// order, each column's crossings sorted by depth (ties in a fixed order: the same bits every run).
+// `visit(first, last)` sees each column with two or more crossings. Buffers kept per thread: a bake
+// measures hundreds of poses.
+template <typename Visit>
+void forEachColumn(const std::vector<PosedPatch>& surfaces, int axis, double step, Visit visit) {
   thread_local std::vector<Crossing> crossings;
   thread_local std::vector<size_t> start, next;
-  thread_local std::vector<std::pair<double, int>> sorted;  // (depth, delta)
+  thread_local std::vector<ColumnCrossing> sorted;
   crossings.clear();
-  for (const PosedPatch& surface : surfaces) {
-    const std::vector<Eigen::Vector3d>& welded = *surface.welded;
-    for (const auto& t : surface.patch->triangles) addTriangle(welded[t[0]], welded[t[1]], welded[t[2]], axis, step, &crossings);
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    const std::vector<Eigen::Vector3d>& welded = *surfaces[s].welded;
+    const std::vector<std::array<int, 3>>& triangles = surfaces[s].patch->triangles;
+    for (size_t t = 0; t < triangles.size(); ++t)
+      addTriangle(welded[static_cast<size_t>(triangles[t][0])], welded[static_cast<size_t>(triangles[t][1])],
+                  welded[static_cast<size_t>(triangles[t][2])], axis, step, &crossings, static_cast<int>(s), static_cast<int>(t));
     // The caps enclosedVolume() closes each hole with: the fan from the loop's mean position.
-    for (const std::vector<int>& hole : surface.patch->holes) {
+    for (const std::vector<int>& hole : surfaces[s].patch->holes) {
       Eigen::Vector3d centre = Eigen::Vector3d::Zero();
       for (int w : hole) centre += welded[static_cast<size_t>(w)];
       centre /= static_cast<double>(hole.size());
       for (size_t k = 0; k < hole.size(); ++k)
         addTriangle(welded[static_cast<size_t>(hole[k])], welded[static_cast<size_t>(hole[(k + 1) % hole.size()])], centre, axis, step,
-                    &crossings);
+                    &crossings, -1, -1);
     }
   }
-  if (crossings.empty()) return 0.0;
-  // Grouped by column with a counting sort (a global sort of every crossing took most of a bake's
-  // figures), columns in (i, j) order, each column's crossings then sorted by depth.
+  if (crossings.empty()) return;
   std::int64_t i_low = crossings[0].i, i_high = i_low, j_low = crossings[0].j, j_high = j_low;
   for (const Crossing& c : crossings) {
     i_low = std::min(i_low, c.i);
@@ -112,25 +131,69 @@ double windingExcess(const std::vector<PosedPatch>& surfaces, int axis, double s
   for (size_t k = 0; k < columns; ++k) start[k + 1] += start[k];
   sorted.resize(crossings.size());
   next.assign(start.begin(), start.end() - 1);
-  for (const Crossing& c : crossings) sorted[next[column(c)]++] = {c.depth, c.delta};
-  double excess = 0.0;
+  for (const Crossing& c : crossings) sorted[next[column(c)]++] = {c.depth, c.delta, c.surface, c.triangle};
   for (size_t k = 0; k < columns; ++k) {
-    const auto first = sorted.begin() + static_cast<std::ptrdiff_t>(start[k]), last = sorted.begin() + static_cast<std::ptrdiff_t>(start[k + 1]);
+    ColumnCrossing* first = sorted.data() + start[k];
+    ColumnCrossing* last = sorted.data() + start[k + 1];
     if (last - first < 2) continue;
     std::sort(first, last);
-    int winding = first->second;
-    for (auto at = first + 1; at != last; ++at) {
-      excess += static_cast<double>(winding - std::clamp(winding, 0, 1)) * (at->first - (at - 1)->first);
-      winding += at->second;
-    }
+    visit(first, last);
   }
+}
+
+}  // namespace
+
+double windingExcess(const std::vector<PosedPatch>& surfaces, int axis, double step) {
+  double excess = 0.0;
+  forEachColumn(surfaces, axis, step, [&](const ColumnCrossing* first, const ColumnCrossing* last) {
+    int winding = first->delta;
+    for (const ColumnCrossing* at = first + 1; at != last; ++at) {
+      excess += static_cast<double>(winding - std::clamp(winding, 0, 1)) * (at->depth - (at - 1)->depth);
+      winding += at->delta;
+    }
+  });
   return excess * step * step;
+}
+
+std::vector<std::vector<float>> exposedShare(const std::vector<PosedPatch>& surfaces, int axis, double step) {
+  std::vector<std::vector<float>> exposed(surfaces.size()), hits(surfaces.size());
+  for (size_t s = 0; s < surfaces.size(); ++s) {
+    exposed[s].assign(surfaces[s].welded->size(), 0.0f);
+    hits[s].assign(surfaces[s].welded->size(), 0.0f);
+  }
+  forEachColumn(surfaces, axis, step, [&](const ColumnCrossing* first, const ColumnCrossing* last) {
+    int winding = 0;
+    for (const ColumnCrossing* at = first; at != last; ++at) {
+      // The winding on the side the triangle faces: before it when the column enters, after it when it
+      // leaves. Zero: the triangle bounds the occupied space.
+      const int faced = at->delta > 0 ? winding : winding + at->delta;
+      winding += at->delta;
+      if (at->surface < 0) continue;
+      const size_t s = static_cast<size_t>(at->surface);
+      for (int corner : surfaces[s].patch->triangles[static_cast<size_t>(at->triangle)]) {
+        exposed[s][static_cast<size_t>(corner)] += faced == 0 ? 1.0f : 0.0f;
+        hits[s][static_cast<size_t>(corner)] += 1.0f;
+      }
+    }
+  });
+  for (size_t s = 0; s < surfaces.size(); ++s)
+    for (size_t w = 0; w < hits[s].size(); ++w) exposed[s][w] = hits[s][w] > 0.0f ? exposed[s][w] / hits[s][w] : 1.0f;
+  return exposed;
 }
 
 double occupiedVolume(const std::vector<PosedPatch>& surfaces, int axis, double step) {
   double volume = 0.0;
   for (const PosedPatch& surface : surfaces) volume += enclosedVolume(*surface.patch, *surface.welded);
   return volume - windingExcess(surfaces, axis, step);
+}
+
+OccupancyGrid occupancyGrid(const Eigen::Vector3d& low, const Eigen::Vector3d& high, double columns) {
+  OccupancyGrid grid;
+  const Eigen::Vector3d extent = high - low;
+  if (!extent.allFinite() || !(extent.maxCoeff() > 0.0)) return grid;
+  extent.minCoeff(&grid.axis);
+  grid.step = extent.maxCoeff() / columns;
+  return grid;
 }
 
 }  // namespace rigbake

@@ -28,7 +28,21 @@ struct PosedPatch {
 // for the same input.
 double windingExcess(const std::vector<PosedPatch>& surfaces, int axis, double step);
 
+// Per surface and welded vertex, the share of its triangles' column crossings that bound the occupied
+// space (winding 0 on the side the triangle faces): 0 for skin inside other skin (a fold's), 1 for skin
+// with nothing over it; 1 where no column crosses its triangles. What the response fit's body row
+// counts with `--fit-volume occupied` (pipeline/response_fit.h).
+std::vector<std::vector<float>> exposedShare(const std::vector<PosedPatch>& surfaces, int axis, double step);
+
 // Signed enclosed volume of all of `surfaces`, less their winding excess.
 double occupiedVolume(const std::vector<PosedPatch>& surfaces, int axis, double step);
+
+// Columns along the axis a body's bounding box [low, high] is thinnest in (the most columns cross it),
+// `columns` of them across its largest extent; step 0 for an empty or degenerate box.
+struct OccupancyGrid {
+  int axis = 2;
+  double step = 0.0;
+};
+OccupancyGrid occupancyGrid(const Eigen::Vector3d& low, const Eigen::Vector3d& high, double columns);
 
 }  // namespace rigbake

@@ -210,7 +210,9 @@ void PoseRowBuilder::addVertex(const FitPart& part, int w, const Eigen::Vector3d
 // their shares are only added up again (addInnerVertex()).
 void PoseRowBuilder::addBodyVertex(size_t p, int w) {
   const FitPart& part = problem_.surfaces.parts[p];
-  const Eigen::Vector3d& g = s_.normals[p][w];
+  // With the occupied volume (FixedPieces::exposure) skin inside other skin earns the row nothing.
+  Eigen::Vector3d g = s_.normals[p][w];
+  if (!problem_.fixed.exposure.empty()) g *= static_cast<double>(problem_.fixed.exposure[pose_][p][static_cast<size_t>(w)]);
   MuscleSums* share = s_.body_shares[p].data() + part.first_share[w];
   for (const MuscleVertex* mv = part.slotsBegin(w); mv != part.slotsEnd(w); ++mv) {
     const MuscleKeyMotion& motion = s_.key_motion[mv->muscle];
@@ -681,7 +683,8 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   const int passes = options.iterations + 2;
   reportProgress(options.progress, kStage, 0, passes);
   applyAmplitudes(layout, talk, muscles);
-  const FixedPieces fixed = measureFixedPieces(skeleton, poses, buildMuscleRig(*muscles, skeleton), frames.bind_inverse, threads, &surfaces);
+  const FixedPieces fixed = measureFixedPieces(skeleton, poses, buildMuscleRig(*muscles, skeleton), frames.bind_inverse,
+                                                options.occupied_volume, threads, &surfaces);
 
   // The prior: the talk's amplitudes, each scaled by how far the poses drive its key. Each pose's rows
   // stand for options.pose_weight poses of the clips: the prior is weighed against that many, so a fit

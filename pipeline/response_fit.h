@@ -70,6 +70,12 @@ struct ResponseFitOptions {
   // volume for smoothness on every character measured, differently per mesh (the Laplacian grows with
   // the square of the edge length): docs/deformation-quality.md, "The fit's smoothness term".
   double smoothness_weight = 0.0;
+  // Which volume the body's row keeps (issue 29's "measures a fit cannot game"): false, the signed volume,
+  // in which skin pushed into a fold counts twice; true, the occupied one's gradient: at each fitted pose
+  // the skin inside other skin under the starting (the talk's) response earns the row nothing, so
+  // swelling into a fold does not pay (the row's value stays the signed volume). docs/deformation-quality.md,
+  // "The fit on the occupied volume".
+  bool occupied_volume = false;
   // Bounds on the amplitudes. Compression: [min_compression_fraction x the talk's, max_amplitude];
   // stretch: [0, max_stretch_amplitude] and no thinner across the fibre than min_stretch_scale (a
   // stretched muscle thins, never swells); twist: [-min_twist_amplitude, max_twist_amplitude] (a twist

@@ -103,16 +103,10 @@ struct SampleFigures {
   double volume = 0.0;
 };
 
-// The grid the occupied volume is sampled on: columns along the axis the bind body is thinnest in (the
-// most columns cross it), a 256th of its largest extent apart (7 mm on a 1.8 m body): finer grids cost a
-// bake's figures twice the time per halving and move a change by under 0.35 points, and the rig's
-// difference from plain skinning by under 0.03 (docs/deformation-quality.md).
-struct OccupancyGrid {
-  int axis = 2;
-  double step = 0.0;
-};
-
-OccupancyGrid occupancyGrid(const Character& character, const std::vector<MeasuredPart>& parts) {
+// The grid the occupied volume is sampled on: a 256th of the bind body's largest extent (7 mm on a
+// 1.8 m body): finer grids cost a bake's figures twice the time per halving and move a change by under
+// 0.35 points, and the rig's difference from plain skinning by under 0.03 (docs/deformation-quality.md).
+OccupancyGrid bindOccupancyGrid(const Character& character, const std::vector<MeasuredPart>& parts) {
   Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
   for (const MeasuredPart& part : parts) {
     for (const Eigen::Vector3d& p : character.meshes[part.mesh_part].positions) {
@@ -120,12 +114,7 @@ OccupancyGrid occupancyGrid(const Character& character, const std::vector<Measur
       high = high.cwiseMax(p);
     }
   }
-  OccupancyGrid grid;
-  const Eigen::Vector3d extent = high - low;
-  if (!extent.allFinite() || !(extent.maxCoeff() > 0.0)) return grid;
-  extent.minCoeff(&grid.axis);
-  grid.step = extent.maxCoeff() / 256.0;
-  return grid;
+  return occupancyGrid(low, high, 256.0);
 }
 
 // The occupied volume of every part posed by one skinning.
@@ -239,7 +228,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
     bind_welded.push_back(weldedPositions(surfaces.back().surface, character.meshes[part.mesh_part].positions));
     bind_volume += enclosedVolume(surfaces.back().surface.whole, bind_welded.back());
   }
-  const OccupancyGrid grid = occupancyGrid(character, parts);
+  const OccupancyGrid grid = bindOccupancyGrid(character, parts);
   const double bind_occupied = occupiedVolumeOf(surfaces, bind_welded, grid);
   // Every clip's samples in one list, measured on the threads, then read back in order.
   std::vector<std::pair<size_t, size_t>> samples;  // (clip, frame)

@@ -222,8 +222,8 @@ TEST_CASE("cli bake: bad input gives one line, a stable code, and no output file
     CHECK(lineCount(r.err) == 1);
     CHECK(r.err.find("--gltf-weights") != std::string::npos);
   }
-  SECTION("--fit-smoothness -1 and --fit-poses 0") {
-    for (const char* flag : {"--fit-smoothness -1", "--fit-poses 0"}) {
+  SECTION("--fit-smoothness -1, --fit-poses 0 and --fit-volume area") {
+    for (const char* flag : {"--fit-smoothness -1", "--fit-poses 0", "--fit-volume area"}) {
       CliResult r = bake(sampleGlbPathForCli() + " " + flag);
       INFO(flag << ": " << r.err);
       CHECK(r.exit_code == 1);

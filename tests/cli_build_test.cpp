@@ -326,6 +326,8 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
        "#/fit_smoothness"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_smoothness", "smooth"}}}}},
        "#/characters/0/fit_smoothness"},
+      {{{"out", "out"}, {"fit_volume", "area"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/fit_volume"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_volume", true}}}}}, "#/characters/0/fit_volume"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fps", -1}}}}}, "#/characters/0/fps"},
   };
   for (const Case& c : cases) {
@@ -511,7 +513,7 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
       {"out", "out"}, {"response", "keep"}, {"stats", true}, {"packed", true}, {"jiggle", "biceps"},
       {"characters",
        {{{"name", "hero"}, {"input", "hero.glb"}, {"influences", 4}, {"map", "gow"}, {"regions", "body"}, {"hits", "hits.json"},
-         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}},
+         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}, {"fit_volume", "occupied"}},
         {{"name", "springy"}, {"input", "hero1.vrm"}, {"vrm_springs_only", true}},
         {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}}}}};
   std::ofstream(dir / "manifest.json") << manifest.dump(2);
@@ -533,7 +535,7 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
     REQUIRE(run.exit_code == 0);
   };
   bake("hero.glb", "hero", "--influences 4 --map gow --regions body --hits " + ext::shellQuote(dir / "hits.json") +
-                               " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500");
+                               " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500 --fit-volume occupied");
   bake("hero1.vrm", "springy", "--vrm-springs-only --response keep --influences 10");  // build's default: 10
   for (const std::string name : {"hero", "springy"}) {
     INFO(name);

@@ -99,3 +99,29 @@ TEST_CASE("occupied volume: the mannequin's folded elbow occupies less than its 
   // The figure is a volume change of a whole body, not noise: within a few percent.
   for (int s = 0; s < kSurfaceSkinnings; ++s) CHECK(std::abs(occupied[s].change) < 0.05);
 }
+
+TEST_CASE("occupied volume: the exposed share of skin inside other skin, for the fit's --fit-volume occupied") {
+  const Box outer = box({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0});
+  const Box inner = box({0.3, 0.3, 0.3}, {0.6, 0.6, 0.6});
+  const Box apart = box({2.0, 0.0, 0.0}, {3.0, 1.0, 1.0});
+  for (int axis = 0; axis < 3; ++axis) {
+    INFO("axis " << axis);
+    const std::vector<std::vector<float>> share =
+        exposedShare({{&outer.patch, &outer.corners}, {&inner.patch, &inner.corners}, {&apart.patch, &apart.corners}}, axis, 0.01);
+    REQUIRE(share.size() == 3);
+    // The box inside another bounds nothing it occupies: every corner 0; the others bound it: 1.
+    for (int k = 0; k < 8; ++k) {
+      CHECK(share[0][static_cast<size_t>(k)] == 1.0f);
+      CHECK(share[1][static_cast<size_t>(k)] == 0.0f);
+      CHECK(share[2][static_cast<size_t>(k)] == 1.0f);
+    }
+  }
+  // A box half inside the first, seen along x: the columns cross only its two x faces, the one inside
+  // (x = 0.5) buried, the one outside (x = 1.5) bounding the occupied space.
+  const Box shifted = box({0.5, 0.2, 0.2}, {1.5, 0.8, 0.8});
+  const std::vector<std::vector<float>> half = exposedShare({{&outer.patch, &outer.corners}, {&shifted.patch, &shifted.corners}}, 0, 0.01);
+  for (int k = 0; k < 8; ++k) {
+    INFO("corner " << k);
+    CHECK(half[1][static_cast<size_t>(k)] == (k & 1 ? 1.0f : 0.0f));
+  }
+}
