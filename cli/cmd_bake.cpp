@@ -190,7 +190,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << " has no muscle across the hips or knees, and clip '" << legs.clip << "' turns " << legs.joint << " by "
               << legs.largest_turn_deg << " degrees: the legs stay plain skinning (--preset gow_fullbody covers them)\n";
   }
-  if (options.fit_volume == "occupied" && options.fit_smoothness == 0.0 && out.bake.fit.parameters > 0) {
+  if (options.fit_volume == "occupied" && options.fit_smoothness == 0.0 && bake.fit.parameters > 0) {
     // Measured: without the smoothness term the occupied fit's result turns on which skin the grid finds
     // inside a fold (Cyberpunk: 3 to 21 of 22 clips halved as the grid changes), with it it does not.
     std::cerr << "note: --fit-volume occupied without --fit-smoothness is not stable (which skin counts as inside a fold "

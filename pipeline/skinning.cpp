@@ -139,19 +139,6 @@ std::vector<Eigen::Vector3d> skinDualQuaternion(const std::vector<Eigen::Vector3
   return posed;
 }
 
-void skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& influences,
-                        const DualQuaternionFrame& frame, const std::vector<int>& vertices,
-                        std::vector<Eigen::Vector3d>* posed) {
-  assert(influences.vertexCount() == static_cast<int>(bind_positions.size()));
-  const size_t slots = static_cast<size_t>(influences.slots_per_vertex);
-  posed->resize(vertices.size());
-  for (size_t i = 0; i < vertices.size(); ++i) {
-    const size_t v = static_cast<size_t>(vertices[i]);
-    (*posed)[i] = dualQuaternionVertex(bind_positions[v], &influences.weights[v * slots],
-                                       &influences.joints[v * slots], static_cast<int>(slots), frame);
-  }
-}
-
 void skinInputAndRig(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& input,
                      const InfluenceSet& rig, const std::vector<Eigen::Affine3d>& frame,
                      const DualQuaternionFrame& dual_quaternions, const std::vector<int>& vertices,

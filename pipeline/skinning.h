@@ -45,11 +45,6 @@ void splitDualQuaternion(const Eigen::Affine3d& matrix, Eigen::Quaterniond* real
 std::vector<Eigen::Vector3d> skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions,
                                                 const InfluenceSet& influences, const DualQuaternionFrame& frame);
 
-// The same for the listed vertices only, as the skinLinearBlend() overload above.
-void skinDualQuaternion(const std::vector<Eigen::Vector3d>& bind_positions, const InfluenceSet& influences,
-                        const DualQuaternionFrame& frame, const std::vector<int>& vertices,
-                        std::vector<Eigen::Vector3d>* posed);
-
 // The three skinnings the deformation-quality figures compare, of the listed vertices in one pass:
 // linear blend and dual quaternions of `input` and linear blend of `rig` (joints of the skeleton and
 // beyond, in `frame`; `dual_quaternions` splits the skeleton's joints). The same bits as

@@ -27,7 +27,6 @@ struct SurfacePart {
   std::vector<int> moving;             // welded vertices
   // Per moving vertex, the triangles around it (indices into surface.whole.triangles): its normal.
   std::vector<std::vector<int>> around;
-  std::vector<int> needed;             // part vertices the moving ones' roughness reads (them and their rings)
   std::vector<double> bind_roughness;  // per moving vertex
 };
 
@@ -77,13 +76,6 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int corner : triangles[t])
       if (moving_index[static_cast<size_t>(corner)] >= 0) part.around[static_cast<size_t>(moving_index[static_cast<size_t>(corner)])].push_back(static_cast<int>(t));
-  std::vector<char> read(welded_count, 0);
-  for (int w : part.moving) {
-    read[static_cast<size_t>(w)] = 1;
-    for (int n : part.ring[static_cast<size_t>(w)]) read[static_cast<size_t>(n)] = 1;
-  }
-  for (size_t w = 0; w < welded_count; ++w)
-    if (read[w]) part.needed.push_back(part.surface.vertex_of_weld[w]);
   part.bind_roughness = roughness(part, weldedPositions(part.surface, mesh.positions));
   return part;
 }
@@ -93,6 +85,16 @@ double percentile95(std::vector<double>* values) {
   const size_t at = static_cast<size_t>(0.95 * static_cast<double>(values->size() - 1));
   std::nth_element(values->begin(), values->begin() + static_cast<std::ptrdiff_t>(at), values->end());
   return (*values)[at];
+}
+
+// Every vertex of one part posed by the four skinnings the figures compare, in kSurfaceSkinnings order:
+// plain and dual quaternions of the input's weights, centres of rotation, plain of the rig's.
+std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> poseSkinnings(const std::vector<Eigen::Vector3d>& bind,
+                                                                          const MeasuredPart& weights, const SurfacePart& part,
+                                                                          const SkinFrame& frame,
+                                                                          const DualQuaternionFrame& rotations) {
+  return {skinLinearBlend(bind, weights.input, frame), skinDualQuaternion(bind, weights.input, rotations),
+          skinCentreOfRotation(bind, weights.input, part.centres, frame, rotations), skinLinearBlend(bind, weights.rig, frame)};
 }
 
 // One sample: each skinning's roughness rise percentile and occupied volume, and the centres of
@@ -135,9 +137,7 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
     const std::vector<Eigen::Vector3d>& bind = character.meshes[parts[p].mesh_part].positions;
     const SurfacePart& part = surfaces[p];
     // Every vertex posed by each skinning: the occupied volume takes them all.
-    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {
-        skinLinearBlend(bind, parts[p].input, frame), skinDualQuaternion(bind, parts[p].input, rotations),
-        skinCentreOfRotation(bind, parts[p].input, part.centres, frame, rotations), skinLinearBlend(bind, parts[p].rig, frame)};
+    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = poseSkinnings(bind, parts[p], part, frame, rotations);
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       whole[s].push_back(weldedPositions(part.surface, posed[s]));
       const std::vector<double> r = roughness(part, whole[s].back());
@@ -167,9 +167,7 @@ std::vector<CreaseContact> measureCreases(const Character& character, const std:
     if (!touched) continue;
     const std::vector<Eigen::Vector3d>& bind = character.meshes[mesh].positions;
     const SurfacePart& part = surfaces[p];
-    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = {
-        skinLinearBlend(bind, parts[p].input, frame), skinDualQuaternion(bind, parts[p].input, rotations),
-        skinCentreOfRotation(bind, parts[p].input, part.centres, frame, rotations), skinLinearBlend(bind, parts[p].rig, frame)};
+    const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = poseSkinnings(bind, parts[p], part, frame, rotations);
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       const std::vector<Eigen::Vector3d> normals = vertexNormals(part.surface.whole, weldedPositions(part.surface, posed[s]));
       auto add = [&](const std::vector<int>& vertices, CreaseSide* side) {
