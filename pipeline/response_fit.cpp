@@ -210,9 +210,11 @@ void PoseRowBuilder::addVertex(const FitPart& part, int w, const Eigen::Vector3d
 // their shares are only added up again (addInnerVertex()).
 void PoseRowBuilder::addBodyVertex(size_t p, int w) {
   const FitPart& part = problem_.surfaces.parts[p];
-  // With the occupied volume (FixedPieces::exposure) skin inside other skin earns the row nothing.
-  Eigen::Vector3d g = s_.normals[p][w];
-  if (!problem_.fixed.exposure.empty()) g *= static_cast<double>(problem_.fixed.exposure[pose_][p][static_cast<size_t>(w)]);
+  const Eigen::Vector3d& g = s_.normals[p][w];
+  // With the occupied volume (FixedPieces::exposure) skin inside other skin earns the body row nothing;
+  // the shares kept for the regions' rows stay the signed volume's.
+  const double exposed =
+      problem_.fixed.exposure.empty() ? 1.0 : static_cast<double>(problem_.fixed.exposure[pose_][p][static_cast<size_t>(w)]);
   MuscleSums* share = s_.body_shares[p].data() + part.first_share[w];
   for (const MuscleVertex* mv = part.slotsBegin(w); mv != part.slotsEnd(w); ++mv) {
     const MuscleKeyMotion& motion = s_.key_motion[mv->muscle];
@@ -220,9 +222,9 @@ void PoseRowBuilder::addBodyVertex(size_t p, int w) {
     const double along_side = mv->weight * g.dot(motion.side_axis);
     *share = {along_up, along_side, mv->q.y() * along_up + mv->q.z() * along_side};
     MuscleSums& sum = s_.sums[mv->muscle];
-    sum.up += share->up;
-    sum.side += share->side;
-    sum.scale += share->scale;
+    sum.up += exposed * share->up;
+    sum.side += exposed * share->side;
+    sum.scale += exposed * share->scale;
     ++share;
   }
 }
