@@ -114,7 +114,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
   const ClipQuality* roughest = nullptr;
   for (const ClipQuality& clip : bake.quality.clips) {
     if (!clip.surface.measured) continue;
-    auto ratio = [](const ClipQuality& c) { return c.surface.roughness_rise[3] / std::max(c.surface.roughness_rise[0], 1e-5); };
+    auto ratio = [](const ClipQuality& c) { return c.surface.roughness_rise[3] / std::max(c.surface.roughness_rise[0], kRoughnessFloor); };
     if (!roughest || ratio(clip) > ratio(*roughest)) roughest = &clip;
   }
   if (roughest) {
@@ -122,6 +122,24 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
     std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
               << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
               << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm\n";
+  }
+  // Strain: the clip whose rig stretches or squashes its skin most against plain skinning (as validate's
+  // SKIN_STRAIN takes it).
+  const ClipQuality* strained = nullptr;
+  auto strain_ratio = [](const ClipQuality& c) {
+    const SurfaceFigures& f = c.surface;
+    return std::max(f.edge_strain[3] / std::max(f.edge_strain[0], kStrainFloor), f.area_strain[3] / std::max(f.area_strain[0], kStrainFloor));
+  };
+  for (const ClipQuality& clip : bake.quality.clips) {
+    if (clip.surface.measured && (!strained || strain_ratio(clip) > strain_ratio(*strained))) strained = &clip;
+  }
+  if (strained) {
+    const double* edge = strained->surface.edge_strain;
+    const double* area = strained->surface.area_strain;
+    std::cerr << std::setprecision(3) << "strain (95th percentile of the moving skin's edge lengths / triangle areas), most against plain skinning in '"
+              << strained->clip << "': input skinning " << 100.0 * edge[0] << " / " << 100.0 * area[0] << " %, dual quaternions "
+              << 100.0 * edge[1] << " / " << 100.0 * area[1] << " %, centres of rotation " << 100.0 * edge[2] << " / " << 100.0 * area[2]
+              << " %, rig " << 100.0 * edge[3] << " / " << 100.0 * area[3] << " %\n";
   }
   // The crease whose rig passes more skin through the opposing skin than plain skinning does, most of all.
   const ClipQuality* crease_clip = nullptr;
@@ -165,7 +183,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << " points (input skinning " << 100.0 * loss.input << " %, rig " << 100.0 * loss.rig << " %, volume about the joint)\n";
   }
   if (!skinFiguresWritten(options) && !bake.quality.clips.empty()) {
-    std::cerr << "skin figures (seams, roughness, occupied volume, creases, joint regions, centres of rotation): not measured; --stats or "
+    std::cerr << "skin figures (seams, roughness, strain, occupied volume, creases, joint regions, centres of rotation): not measured; --stats or "
                  "--json measures them here, `rigbake validate` in the baked file\n";
   }
   if (bake.quality.seam_places > 0 && !bake.quality.clips.empty()) {
@@ -290,7 +308,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       "and as packed buffers (docs/packed-influences.md). By default the muscles move at run time from the "
       "RIGBAKE_muscle_rig extension, adding no animation data (docs/runtime.md). Reports the weights' deformation "
       "error in mm and the volume per clip against plain and dual-quaternion skinning (--stats for every body "
-      "region and the skin's figures: seams, roughness, occupied volume, creases, joint regions, centres of rotation, which also "
+      "region and the skin's figures: seams, roughness, strain, occupied volume, creases, joint regions, centres of rotation, which also "
       "print their worst case here; `rigbake validate` checks them in the baked file).\n\nExample: rigbake bake hero.glb --influences 10 -o hero_baked.glb --stats stats.json");
   command->add_option("character", options->character, "Character file (.glb, .gltf, .vrm, .fbx)")->required();
   command->add_option("-o,--output", options->output, "Baked glTF to write (.glb/.vrm binary, .gltf JSON)")->required();
@@ -317,7 +335,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
   command->add_option("--packed-out", options->packed_output, "Also write the packed influences as a raw file");
   command->add_option("--stats", options->stats_output,
                       "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
-                      "body region, bytes per vertex, and the skin's: seams, roughness, occupied volume, creases and "
+                      "body region, bytes per vertex, and the skin's: seams, roughness, strain, occupied volume, creases and "
                       "joint regions against plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for "
                       "standard output. The skin's figures cost more than the rest of the bake: a bake without --stats "
                       "or --json skips them");

@@ -13,6 +13,12 @@ nlohmann::json volumesJson(const SkinningVolumes& volumes) {
           {"rig", extremeJson(volumes.rig)}};
 }
 
+// A figure of the four skinnings the surface figures compare (fractions), as percent.
+nlohmann::json percentPerSkinning(const double (&figure)[kSurfaceSkinnings]) {
+  return {{"input", 100.0 * figure[0]}, {"dual_quaternion", 100.0 * figure[1]},
+          {"centre_of_rotation", 100.0 * figure[2]}, {"rig", 100.0 * figure[3]}};
+}
+
 nlohmann::json moveJson(const MuscleSkinMove& move) {
   if (!move.measured) return nullptr;
   return {{"clip", move.clip},          {"time_s", move.time},
@@ -53,6 +59,8 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     surface_clips[clip.clip] = {{"roughness_rise_p95_mm",
                                  {{"input", 1000.0 * rise[0]}, {"dual_quaternion", 1000.0 * rise[1]},
                                   {"centre_of_rotation", 1000.0 * rise[2]}, {"rig", 1000.0 * rise[3]}}},
+                                {"edge_strain_p95_percent", percentPerSkinning(clip.surface.edge_strain)},
+                                {"area_strain_p95_percent", percentPerSkinning(clip.surface.area_strain)},
                                 {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)},
                                 {"occupied_volume",
                                  {{"input", extremeJson(clip.surface.occupied[0])},

@@ -15,7 +15,7 @@ namespace rigbake {
 
 // Thresholds relative to body height keep one default meaningful for a 1.2 m robot and a 1.9 m
 // soldier, whatever the file's units.
-inline constexpr std::array<CheckDefinition, 21> kCheckDefinitions = {{
+inline constexpr std::array<CheckDefinition, 22> kCheckDefinitions = {{
     {"LANDMARKS_RESOLVED", Severity::kError, 0.0, Comparison::kAtMost, "landmarks",
      "Required canonical landmarks that match no joint and cannot be derived"},
     {"LOCATOR_SYMMETRY", Severity::kWarning, 0.02, Comparison::kAtMost, "x body height",
@@ -45,6 +45,8 @@ inline constexpr std::array<CheckDefinition, 21> kCheckDefinitions = {{
      "Largest amount by which skin vertices sharing a bind position move apart under the rig beyond the input skinning, per clip"},
     {"SKIN_ROUGHNESS_RISE", Severity::kWarning, 1.2, Comparison::kAtMost, "x plain skinning's",
      "Largest ratio, per clip, of the rig's roughness rise over the bind pose (95th percentile of the moving skin) to the input skinning's"},
+    {"SKIN_STRAIN", Severity::kWarning, 1.2, Comparison::kAtMost, "x plain skinning's",
+     "Largest ratio, per clip, of the rig's edge-length or triangle-area strain (95th percentile of the moving skin) to the input skinning's"},
     {"SKIN_BODY_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
      "Largest amount by which the rig's whole-body volume change exceeds the input skinning's, per clip"},
     {"SKIN_OCCUPIED_VOLUME", Severity::kWarning, 0.0, Comparison::kAtMost, "points of volume",
@@ -66,7 +68,7 @@ inline constexpr std::array<CheckDefinition, 21> kCheckDefinitions = {{
 }};
 
 // Every check, in report order.
-constexpr const std::array<CheckDefinition, 21>& checkDefinitions() { return kCheckDefinitions; }
+constexpr const std::array<CheckDefinition, 22>& checkDefinitions() { return kCheckDefinitions; }
 
 // The index of `code` in the table, or the table's size when it is not there.
 constexpr size_t checkIndex(std::string_view code) {

@@ -221,6 +221,7 @@ Report validateBakedCharacter(const ValidationInputs& inputs, const ValidationCo
   report.checks.push_back(checkRegionVolumeLoss(inputs, config));
   report.checks.push_back(checkSeamOpening(inputs, config));
   report.checks.push_back(checkRoughnessRise(inputs, config));
+  report.checks.push_back(checkStrain(inputs, config));
   report.checks.push_back(checkBodyVolume(inputs, config));
   report.checks.push_back(checkOccupiedVolume(inputs, config));
   report.checks.push_back(checkMuscleBulgeOutward(inputs, config));

@@ -75,6 +75,7 @@ CheckResult checkPackedDeformationError(const ValidationInputs& inputs, const st
 CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config);
+CheckResult checkStrain(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkBodyVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkOccupiedVolume(const ValidationInputs& inputs, const ValidationConfig& config);
 CheckResult checkMuscleBulgeOutward(const ValidationInputs& inputs, const ValidationConfig& config);

@@ -63,11 +63,21 @@ struct SeamOpening {
 // at its most deformed samples (surfaceSamples()). Skinnings in the order input (linear blend), dual
 // quaternions, centres of rotation, rig.
 constexpr int kSurfaceSkinnings = 4;
+// Below these a clip's plain skinning is as smooth (scene units of roughness rise) or as unstretched
+// (a fraction of strain) as its bind pose, and a ratio to it says nothing: ratios of the rig's figure
+// to plain skinning's (validate's checks, bake's lines) take plain skinning's as at least these.
+constexpr double kRoughnessFloor = 1e-5;
+constexpr double kStrainFloor = 0.01;
 struct SurfaceFigures {
   bool measured = false;
   // The 95th percentile, over the skin that moves, of each welded vertex's roughness rise over the bind
   // pose (|umbrella Laplacian . normal| posed minus bind), scene units; the largest over the samples.
   double roughness_rise[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
+  // Strain of the same skin, as fractions: the 95th percentile of |posed / bind - 1| of the lengths of
+  // the edges and the areas of the welded surface's triangles that have a corner in the skin that moves;
+  // the largest over the samples.
+  double edge_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
+  double area_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation
   // The whole body's change of occupied volume (pipeline/occupied_volume.h: each point inside the skin
   // counted once, so skin pushed through opposing skin keeps nothing), per skinning as roughness_rise;

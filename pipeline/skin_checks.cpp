@@ -184,9 +184,6 @@ CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationCon
   return result;
 }
 
-// Below this rise (scene units) a clip's plain skinning is as smooth as its bind pose, and a ratio to
-// it says nothing: the ratio is taken to at least this.
-constexpr double kRoughnessFloor = 1e-5;
 
 // A per-clip check over the skin's surface figures, which only the clips with samples have:
 // `measure(clip, &measurement)` adds a clip's finding, `summary(clips, measured)` is the check's line.
@@ -219,6 +216,27 @@ CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationC
       },
       [](int clips, double measured) {
         return std::to_string(clips) + " clips, the rig's roughness rise at most " + fixedDecimals(measured, 2) + " x the input skinning's";
+      });
+}
+
+
+// Skin stretched or squashed where plain skinning keeps it (docs/deformation-quality.md, "Strain"): the
+// larger of the edge-length and triangle-area ratios.
+CheckResult checkStrain(const ValidationInputs& inputs, const ValidationConfig& config) {
+  return surfaceCheck(
+      checkAt<checkIndex("SKIN_STRAIN")>(), inputs, config,
+      [](const ClipQuality& clip, CheckMeasurement* measurement) {
+        const double* edge = clip.surface.edge_strain;
+        const double* area = clip.surface.area_strain;
+        auto figures = [](const double* f) {
+          return "input " + fixedDecimals(100.0 * f[0], 2) + " %, dual quaternions " + fixedDecimals(100.0 * f[1], 2) +
+                 " %, centres of rotation " + fixedDecimals(100.0 * f[2], 2) + " %, rig " + fixedDecimals(100.0 * f[3], 2) + " %";
+        };
+        measurement->add(std::max(edge[3] / std::max(edge[0], kStrainFloor), area[3] / std::max(area[0], kStrainFloor)), clip.clip,
+                         "strain (95th percentile) of edge lengths " + figures(edge) + "; of triangle areas " + figures(area));
+      },
+      [](int clips, double measured) {
+        return std::to_string(clips) + " clips, the rig's strain at most " + fixedDecimals(measured, 2) + " x the input skinning's";
       });
 }
 

@@ -28,6 +28,12 @@ struct SurfacePart {
   // Per moving vertex, the triangles around it (indices into surface.whole.triangles): its normal.
   std::vector<std::vector<int>> around;
   std::vector<double> bind_roughness;  // per moving vertex
+  // The strain figures' pieces: every edge and triangle of the welded surface with a moving corner,
+  // with its bind length and area (those of zero length or area are left out: no ratio).
+  std::vector<std::array<int, 2>> strain_edges;
+  std::vector<double> bind_edge_length;
+  std::vector<int> strain_triangles;   // indices into surface.whole.triangles
+  std::vector<double> bind_area;
 };
 
 // Per moving vertex, |L . n|: L the umbrella Laplacian, n the area-weighted normal of the triangles
@@ -53,6 +59,26 @@ std::vector<double> roughness(const SurfacePart& part, const std::vector<Eigen::
   return out;
 }
 
+double triangleArea(const std::vector<Eigen::Vector3d>& welded, const std::array<int, 3>& tri) {
+  const Eigen::Vector3d& a = welded[static_cast<size_t>(tri[0])];
+  return 0.5 * (welded[static_cast<size_t>(tri[1])] - a).cross(welded[static_cast<size_t>(tri[2])] - a).norm();
+}
+
+// |posed / bind - 1| of every strain edge's length and every strain triangle's area, appended.
+void appendStrains(const SurfacePart& part, const std::vector<Eigen::Vector3d>& welded, std::vector<double>* edges,
+                   std::vector<double>* areas) {
+  for (size_t e = 0; e < part.strain_edges.size(); ++e) {
+    const auto& edge = part.strain_edges[e];
+    const double length = (welded[static_cast<size_t>(edge[0])] - welded[static_cast<size_t>(edge[1])]).norm();
+    edges->push_back(std::abs(length / part.bind_edge_length[e] - 1.0));
+  }
+  const auto& triangles = part.surface.whole.triangles;
+  for (size_t t = 0; t < part.strain_triangles.size(); ++t) {
+    const double area = triangleArea(welded, triangles[static_cast<size_t>(part.strain_triangles[t])]);
+    areas->push_back(std::abs(area / part.bind_area[t] - 1.0));
+  }
+}
+
 SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int skeleton_joints, double weld_tolerance, int threads) {
   SurfacePart part;
   part.surface = buildVolumeSurface(mesh, weld_tolerance);
@@ -76,7 +102,34 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int corner : triangles[t])
       if (moving_index[static_cast<size_t>(corner)] >= 0) part.around[static_cast<size_t>(moving_index[static_cast<size_t>(corner)])].push_back(static_cast<int>(t));
-  part.bind_roughness = roughness(part, weldedPositions(part.surface, mesh.positions));
+  const std::vector<Eigen::Vector3d> bind = weldedPositions(part.surface, mesh.positions);
+  part.bind_roughness = roughness(part, bind);
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    const auto& tri = triangles[t];
+    if (moving_index[static_cast<size_t>(tri[0])] < 0 && moving_index[static_cast<size_t>(tri[1])] < 0 &&
+        moving_index[static_cast<size_t>(tri[2])] < 0)
+      continue;
+    const double area = triangleArea(bind, tri);
+    if (area > 0.0) {
+      part.strain_triangles.push_back(static_cast<int>(t));
+      part.bind_area.push_back(area);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      part.strain_edges.push_back({std::min(a, b), std::max(a, b)});
+    }
+  }
+  // Each edge once (two triangles share it), in a fixed order.
+  std::sort(part.strain_edges.begin(), part.strain_edges.end());
+  part.strain_edges.erase(std::unique(part.strain_edges.begin(), part.strain_edges.end()), part.strain_edges.end());
+  std::vector<std::array<int, 2>> kept;
+  for (const auto& edge : part.strain_edges) {
+    const double length = (bind[static_cast<size_t>(edge[0])] - bind[static_cast<size_t>(edge[1])]).norm();
+    if (!(length > 0.0)) continue;
+    kept.push_back(edge);
+    part.bind_edge_length.push_back(length);
+  }
+  part.strain_edges = std::move(kept);
   return part;
 }
 
@@ -101,6 +154,7 @@ std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> poseSkinnings(const 
 // rotation's body volume.
 struct SampleFigures {
   std::array<double, kSurfaceSkinnings> rise{};
+  std::array<double, kSurfaceSkinnings> edge_strain{}, area_strain{};
   std::array<double, kSurfaceSkinnings> occupied{};
   double volume = 0.0;
 };
@@ -130,7 +184,7 @@ double occupiedVolumeOf(const std::vector<SurfacePart>& surfaces, const std::vec
 SampleFigures measureSample(const Character& character, const std::vector<MeasuredPart>& parts,
                             const std::vector<SurfacePart>& surfaces, const OccupancyGrid& grid, const SkinFrame& frame) {
   const DualQuaternionFrame rotations = dualQuaternionFrame(frame);
-  std::array<std::vector<double>, kSurfaceSkinnings> rises;
+  std::array<std::vector<double>, kSurfaceSkinnings> rises, edge_strains, area_strains;
   std::array<std::vector<std::vector<Eigen::Vector3d>>, kSurfaceSkinnings> whole;  // per skinning, per part
   SampleFigures figures;
   for (size_t p = 0; p < parts.size(); ++p) {
@@ -142,11 +196,14 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
       whole[s].push_back(weldedPositions(part.surface, posed[s]));
       const std::vector<double> r = roughness(part, whole[s].back());
       for (size_t i = 0; i < r.size(); ++i) rises[s].push_back(r[i] - part.bind_roughness[i]);
+      appendStrains(part, whole[s].back(), &edge_strains[s], &area_strains[s]);
       if (s == 2) figures.volume += enclosedVolume(part.surface.whole, whole[s].back());
     }
   }
   for (int s = 0; s < kSurfaceSkinnings; ++s) {
     figures.rise[s] = percentile95(&rises[s]);
+    figures.edge_strain[s] = percentile95(&edge_strains[s]);
+    figures.area_strain[s] = percentile95(&area_strains[s]);
     figures.occupied[s] = occupiedVolumeOf(surfaces, whole[s], grid);
   }
   return figures;
@@ -241,7 +298,11 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
     const auto [c, t] = samples[i];
     SurfaceFigures& surface = quality->clips[c].surface;
     surface.measured = true;
-    for (int s = 0; s < kSurfaceSkinnings; ++s) surface.roughness_rise[s] = std::max(surface.roughness_rise[s], figures[i].rise[s]);
+    for (int s = 0; s < kSurfaceSkinnings; ++s) {
+      surface.roughness_rise[s] = std::max(surface.roughness_rise[s], figures[i].rise[s]);
+      surface.edge_strain[s] = std::max(surface.edge_strain[s], figures[i].edge_strain[s]);
+      surface.area_strain[s] = std::max(surface.area_strain[s], figures[i].area_strain[s]);
+    }
     const double change = bind_volume != 0.0 ? figures[i].volume / bind_volume - 1.0 : 0.0;
     if (std::abs(change) > std::abs(surface.centre_of_rotation.change)) surface.centre_of_rotation = {change, clips[c].times[t]};
     for (int s = 0; s < kSurfaceSkinnings; ++s) {

@@ -25,9 +25,12 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   // The summary line, where the largest error is, the response fit, the volume per clip, the roughest
-  // clip's roughness rise, the occupied volume, the crease the rig folds most against plain skinning
-  // and the joint region that loses most beyond it (the sample is one welded mesh: no seam line).
-  CHECK(lineCount(r.err) == 10);
+  // clip's roughness rise, the most strained clip, the occupied volume, the crease the rig folds most
+  // against plain skinning and the joint region that loses most beyond it (the sample is one welded
+  // mesh: no seam line).
+  CHECK(lineCount(r.err) == 11);
+  CHECK(r.err.find("strain (95th percentile of the moving skin's edge lengths / triangle areas), most against plain skinning in 'ElbowFlexion'") !=
+        std::string::npos);
   CHECK(r.err.find("occupied volume (each point inside the skin once") != std::string::npos);
   CHECK(r.err.find("joint region losing most beyond plain skinning: the skin of 'JO") != std::string::npos);
   CHECK(r.err.find("crease 'elbow_l' in 'ElbowFlexion' bent 130") != std::string::npos);
@@ -80,19 +83,19 @@ TEST_CASE("cli bake: without --stats or --json the skin's figures are skipped, s
   REQUIRE(stats.exit_code == 0);
   // The figures cost more than the rest of the bake (bench/run); they change nothing in the file.
   CHECK(slurp(dir / "plain.glb") == slurp(dir / "stats.glb"));
-  CHECK(plain.err.find("skin figures (seams, roughness, occupied volume, creases, joint regions, centres of rotation): not measured; --stats") !=
+  CHECK(plain.err.find("skin figures (seams, roughness, strain, occupied volume, creases, joint regions, centres of rotation): not measured; --stats") !=
         std::string::npos);
   CHECK(stats.err.find("skin figures") == std::string::npos);
-  for (const char* line : {"crease '", "roughness rise", "occupied volume (each point", "joint region losing", ", centres of rotation "}) {
+  for (const char* line : {"crease '", "roughness rise", "strain (95th", "occupied volume (each point", "joint region losing", ", centres of rotation "}) {
     INFO(line);
     CHECK(plain.err.find(line) == std::string::npos);
     CHECK(stats.err.find(line) != std::string::npos);
   }
   // The volumes per clip against plain and dual-quaternion skinning are measured either way.
   CHECK(plain.err.find("volume in 'ElbowFlexion': input skinning -0.74 %, dual quaternions -0.06 %") != std::string::npos);
-  // Four lines (roughness, occupied volume, crease, joint region) become the one that says they were
-  // not measured.
-  CHECK(lineCount(plain.err) == lineCount(stats.err) - 4 + 1);
+  // Five lines (roughness, strain, occupied volume, crease, joint region) become the one that says they
+  // were not measured.
+  CHECK(lineCount(plain.err) == lineCount(stats.err) - 5 + 1);
 }
 
 TEST_CASE("cli bake: fewer influences cost more error, in the reported figures") {

@@ -223,6 +223,31 @@ TEST_CASE("validate: deformation figures, checks and pictures from the baked fil
     CHECK(check["findings"].size() == 3);
   }
   CHECK(status.count("SKIN_OCCUPIED_VOLUME") == 1);
+  // SKIN_STRAIN: per clip the larger of the rig's edge-length and triangle-area strain over plain
+  // skinning's (each floored at 1 %), its largest over the clips. On the mannequin's elbow the rig
+  // stretches the fold's skin more than plain skinning (area 29 % against 22 %), dual quaternions less.
+  double strain = 0.0;
+  for (const auto& [clip, figures] : quality["surface"]["per_clip"].items()) {
+    const nlohmann::json& edge = figures["edge_strain_p95_percent"];
+    const nlohmann::json& area = figures["area_strain_p95_percent"];
+    auto ratio = [](const nlohmann::json& f) { return f["rig"].get<double>() / std::max(f["input"].get<double>(), 1.0); };
+    strain = std::max({strain, ratio(edge), ratio(area)});
+  }
+  const nlohmann::json& elbow = quality["surface"]["per_clip"]["ElbowFlexion"];
+  INFO("ElbowFlexion strain " << elbow["edge_strain_p95_percent"] << " " << elbow["area_strain_p95_percent"]);
+  CHECK(elbow["edge_strain_p95_percent"]["input"].get<double>() > 10.0);
+  CHECK(elbow["edge_strain_p95_percent"]["input"].get<double>() < 20.0);
+  CHECK(elbow["edge_strain_p95_percent"]["dual_quaternion"].get<double>() < elbow["edge_strain_p95_percent"]["input"].get<double>());
+  CHECK(elbow["area_strain_p95_percent"]["rig"].get<double>() > elbow["area_strain_p95_percent"]["input"].get<double>());
+  for (const auto& check : report["checks"]) {
+    if (check["code"] != "SKIN_STRAIN") continue;
+    CHECK(check["severity"] == "warning");
+    CHECK(check["measured"].get<double>() == Approx(strain).margin(1e-9));
+    CHECK(check["measured"].get<double>() > 1.2);
+    CHECK(check["status"] == "fail");
+    CHECK(check["findings"].size() == 3);
+  }
+  CHECK(status.count("SKIN_STRAIN") == 1);
   // One picture per clip and per muscle kind the clips compress; each a PNG in the page.
   const size_t pictures = quality["pictures"].size();
   CHECK(pictures >= 3 + 8);
