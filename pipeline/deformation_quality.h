@@ -73,9 +73,10 @@ struct SurfaceFigures {
   // The 95th percentile, over the skin that moves, of each welded vertex's roughness rise over the bind
   // pose (|umbrella Laplacian . normal| posed minus bind), scene units; the largest over the samples.
   double roughness_rise[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
-  // Strain of the same skin, as fractions: the 95th percentile of |posed / bind - 1| of the lengths of
-  // the edges and the areas of the welded surface's triangles that have a corner in the skin that moves;
-  // the largest over the samples.
+  // Strain of the same skin, as fractions: the 95th percentile of |posed / bind - 1| of the areas of the
+  // welded surface's triangles that have a corner in the skin that moves, and of their edges' lengths
+  // (each triangle's three, so an edge inside the surface counts once per side); the largest over the
+  // samples.
   double edge_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   double area_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation

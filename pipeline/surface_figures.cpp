@@ -28,8 +28,8 @@ struct SurfacePart {
   // Per moving vertex, the triangles around it (indices into surface.whole.triangles): its normal.
   std::vector<std::vector<int>> around;
   std::vector<double> bind_roughness;  // per moving vertex
-  // The strain figures' pieces: every edge and triangle of the welded surface with a moving corner,
-  // with its bind length and area (those of zero length or area are left out: no ratio).
+  // The strain figures' pieces: every triangle of the welded surface with a moving corner and its three
+  // edges, with their bind areas and lengths (triangles of zero area are left out: no ratio).
   std::vector<std::array<int, 2>> strain_edges;
   std::vector<double> bind_edge_length;
   std::vector<int> strain_triangles;   // indices into surface.whole.triangles
@@ -110,26 +110,17 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
         moving_index[static_cast<size_t>(tri[2])] < 0)
       continue;
     const double area = triangleArea(bind, tri);
-    if (area > 0.0) {
-      part.strain_triangles.push_back(static_cast<int>(t));
-      part.bind_area.push_back(area);
-    }
+    if (!(area > 0.0)) continue;
+    part.strain_triangles.push_back(static_cast<int>(t));
+    part.bind_area.push_back(area);
+    // Each triangle's three edges: an edge inside the surface counts once per side, so a body split
+    // into meshes (where each piece has the border edge once) gives the whole's figure.
     for (int k = 0; k < 3; ++k) {
       const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
-      part.strain_edges.push_back({std::min(a, b), std::max(a, b)});
+      part.strain_edges.push_back({a, b});
+      part.bind_edge_length.push_back((bind[static_cast<size_t>(a)] - bind[static_cast<size_t>(b)]).norm());
     }
   }
-  // Each edge once (two triangles share it), in a fixed order.
-  std::sort(part.strain_edges.begin(), part.strain_edges.end());
-  part.strain_edges.erase(std::unique(part.strain_edges.begin(), part.strain_edges.end()), part.strain_edges.end());
-  std::vector<std::array<int, 2>> kept;
-  for (const auto& edge : part.strain_edges) {
-    const double length = (bind[static_cast<size_t>(edge[0])] - bind[static_cast<size_t>(edge[1])]).norm();
-    if (!(length > 0.0)) continue;
-    kept.push_back(edge);
-    part.bind_edge_length.push_back(length);
-  }
-  part.strain_edges = std::move(kept);
   return part;
 }
 
