@@ -248,6 +248,11 @@ TEST_CASE("validate: deformation figures, checks and pictures from the baked fil
     CHECK(check["findings"].size() == 3);
   }
   CHECK(status.count("SKIN_STRAIN") == 1);
+  // report.html puts the four skinnings' surface figures side by side, per clip, and marks the elbow's
+  // area strain (the rig's 29 % against plain skinning's 22 %).
+  CHECK(html.find("<th>plain</th><th>dual quaternions</th><th>centres of rotation</th><th>rig</th>") != std::string::npos);
+  CHECK(html.find("<tr class=\"fail\"><td>ElbowFlexion</td><td>triangle-area strain, %</td>") != std::string::npos);
+  CHECK(html.find("<td>ForearmTwist</td><td>roughness rise, mm</td>") != std::string::npos);
   // One picture per clip and per muscle kind the clips compress; each a PNG in the page.
   const size_t pictures = quality["pictures"].size();
   CHECK(pictures >= 3 + 8);
