@@ -6,7 +6,9 @@
 // each welded vertex's roughness, |L(v) . n(v)| with L the umbrella Laplacian (mean of the one-ring
 // minus the vertex; Taubin 1995) and n the area-weighted normal, is compared with its bind value. The
 // figure is the 95th percentile of that rise over the skin that moves: vertices that blend two joints
-// (each at least 0.05) or carry at least 0.05 of a muscle. docs/deformation-quality.md.
+// (each at least 0.05) or carry at least 0.05 of a muscle. Beside it, the same skin's strain: the 95th
+// percentiles of |posed / bind - 1| of its triangles' areas and their edges' lengths, which roughness
+// does not see (skin stretched within its plane). docs/deformation-quality.md.
 #pragma once
 
 #include <vector>
