@@ -114,8 +114,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
   const ClipQuality* roughest = nullptr;
   for (const ClipQuality& clip : bake.quality.clips) {
     if (!clip.surface.measured) continue;
-    auto ratio = [](const ClipQuality& c) { return c.surface.roughness_rise[3] / std::max(c.surface.roughness_rise[0], kRoughnessFloor); };
-    if (!roughest || ratio(clip) > ratio(*roughest)) roughest = &clip;
+    if (!roughest || roughnessRatio(clip.surface) > roughnessRatio(roughest->surface)) roughest = &clip;
   }
   if (roughest) {
     const double* rise = roughest->surface.roughness_rise;
@@ -126,12 +125,8 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
   // Strain: the clip whose rig stretches or squashes its skin most against plain skinning (as validate's
   // SKIN_STRAIN takes it).
   const ClipQuality* strained = nullptr;
-  auto strain_ratio = [](const ClipQuality& c) {
-    const SurfaceFigures& f = c.surface;
-    return std::max(f.edge_strain[3] / std::max(f.edge_strain[0], kStrainFloor), f.area_strain[3] / std::max(f.area_strain[0], kStrainFloor));
-  };
   for (const ClipQuality& clip : bake.quality.clips) {
-    if (clip.surface.measured && (!strained || strain_ratio(clip) > strain_ratio(*strained))) strained = &clip;
+    if (clip.surface.measured && (!strained || strainRatio(clip.surface) > strainRatio(strained->surface))) strained = &clip;
   }
   if (strained) {
     const double* edge = strained->surface.edge_strain;

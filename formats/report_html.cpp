@@ -583,14 +583,17 @@ std::string percent(double fraction) {
 }
 
 // The skin's surface per clip, the four skinnings side by side: roughness rise and strain (95th
-// percentiles of the moving skin, docs/deformation-quality.md). A row is marked where the rig passes
-// 1.2x plain skinning's figure, as SKIN_ROUGHNESS_RISE and SKIN_STRAIN judge it.
-std::string skinSurfaceTable(const DeformationQuality& quality) {
+// percentiles of the moving skin, docs/deformation-quality.md). A row is marked where the rig's figure
+// over plain skinning's passes the threshold of SKIN_ROUGHNESS_RISE or SKIN_STRAIN (as --config set it).
+std::string skinSurfaceTable(const Report& report) {
+  const CheckResult* roughness = findCheck(report, "SKIN_ROUGHNESS_RISE");
+  const CheckResult* strain = findCheck(report, "SKIN_STRAIN");
   std::string html;
-  for (const ClipQuality& clip : quality.clips) {
+  for (const ClipQuality& clip : report.quality.quality.clips) {
     if (!clip.surface.measured) continue;
-    auto row = [&](const std::string& figure, const double (&values)[kSurfaceSkinnings], double scale, double floor, const char* format) {
-      const bool worse = values[3] > 1.2 * std::max(values[0], floor);
+    auto row = [&](const std::string& figure, const double (&values)[kSurfaceSkinnings], double scale, double floor,
+                   const CheckResult* check, const char* format) {
+      const bool worse = check && rigOverPlain(values, floor) > check->threshold;
       html += "<tr" + std::string(worse ? " class=\"fail\"" : "") + "><td>" + esc(clip.clip) + "</td><td>" + figure + "</td>";
       for (int s = 0; s < kSurfaceSkinnings; ++s) {
         char text[32];
@@ -599,15 +602,15 @@ std::string skinSurfaceTable(const DeformationQuality& quality) {
       }
       html += "</tr>\n";
     };
-    row("roughness rise, mm", clip.surface.roughness_rise, 1000.0, kRoughnessFloor, "%.3f");
-    row("edge strain, %", clip.surface.edge_strain, 100.0, kStrainFloor, "%.1f");
-    row("triangle-area strain, %", clip.surface.area_strain, 100.0, kStrainFloor, "%.1f");
+    row("roughness rise, mm", clip.surface.roughness_rise, 1000.0, kRoughnessFloor, roughness, "%.3f");
+    row("edge strain, %", clip.surface.edge_strain, 100.0, kStrainFloor, strain, "%.1f");
+    row("triangle-area strain, %", clip.surface.area_strain, 100.0, kStrainFloor, strain, "%.1f");
   }
   if (html.empty()) return html;
   return "<p class=\"explain\">The moving skin's surface: its roughness rise over the bind pose (how far a vertex stands out of "
          "its neighbours' plane, beyond its bind value) and its strain (edge lengths and triangle areas against the bind pose), "
          "each the 95th percentile over the skin that moves, the largest over the clip's most deformed samples. A row is marked "
-         "where the rig passes 1.2 times plain skinning's.</p>\n<table class=\"quality\"><tr><th>clip</th><th>figure</th>"
+         "where the rig passes its check's multiple of plain skinning's (SKIN_ROUGHNESS_RISE, SKIN_STRAIN).</p>\n<table class=\"quality\"><tr><th>clip</th><th>figure</th>"
          "<th>plain</th><th>dual quaternions</th><th>centres of rotation</th><th>rig</th></tr>\n" +
          html + "</table>\n";
 }
@@ -651,7 +654,7 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
     });
     for (size_t k = 0; k < std::min<size_t>(3, order.size()); ++k) row(quality.regions[order[k]], clip.regions[order[k]]);
   }
-  html += "</table>\n" + skinSurfaceTable(quality);
+  html += "</table>\n" + skinSurfaceTable(report);
   if (!quality.unmeasured_regions.empty()) {
     std::string names;
     for (const std::string& name : quality.unmeasured_regions) names += (names.empty() ? "" : ", ") + name;

@@ -6,6 +6,7 @@
 // normal relative to (a): a bulge out or a deflation in.
 #pragma once
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,17 @@ struct SurfaceFigures {
   // the largest over the same samples.
   VolumeExtreme occupied[kSurfaceSkinnings];
 };
+
+// The rig's figure over plain skinning's (kSurfaceSkinnings order), plain skinning's taken as at least
+// `floor`; and the two ratios validate's SKIN_ROUGHNESS_RISE and SKIN_STRAIN judge a clip by (strain: the
+// larger of the edges' and the triangles').
+inline double rigOverPlain(const double (&figure)[kSurfaceSkinnings], double floor) {
+  return figure[3] / std::max(figure[0], floor);
+}
+inline double roughnessRatio(const SurfaceFigures& f) { return rigOverPlain(f.roughness_rise, kRoughnessFloor); }
+inline double strainRatio(const SurfaceFigures& f) {
+  return std::max(rigOverPlain(f.edge_strain, kStrainFloor), rigOverPlain(f.area_strain, kStrainFloor));
+}
 
 // Opposing skin at a crease (pipeline/crease_contact.h), one skinning at the crease's peak bend.
 struct CreaseMethodContact {

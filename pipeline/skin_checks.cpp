@@ -204,15 +204,20 @@ CheckResult surfaceCheck(const CheckDefinition& definition, const ValidationInpu
   return result;
 }
 
+// A surface figure of the four skinnings for a finding: "input 1.234 mm, dual quaternions ..., rig ...".
+std::string perSkinning(const double (&figure)[kSurfaceSkinnings], double scale, int decimals, const std::string& unit) {
+  static const char* const kNames[kSurfaceSkinnings] = {"input ", ", dual quaternions ", ", centres of rotation ", ", rig "};
+  std::string text;
+  for (int s = 0; s < kSurfaceSkinnings; ++s) text += kNames[s] + fixedDecimals(scale * figure[s], decimals) + " " + unit;
+  return text;
+}
+
 CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationConfig& config) {
   return surfaceCheck(
       checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>(), inputs, config,
       [](const ClipQuality& clip, CheckMeasurement* measurement) {
-        const double* rise = clip.surface.roughness_rise;
-        measurement->add(rise[3] / std::max(rise[0], kRoughnessFloor), clip.clip,
-                         "roughness rise (95th percentile) input " + fixedDecimals(1000.0 * rise[0], 3) + " mm, dual quaternions " +
-                             fixedDecimals(1000.0 * rise[1], 3) + " mm, centres of rotation " + fixedDecimals(1000.0 * rise[2], 3) +
-                             " mm, rig " + fixedDecimals(1000.0 * rise[3], 3) + " mm");
+        measurement->add(roughnessRatio(clip.surface), clip.clip,
+                         "roughness rise (95th percentile) " + perSkinning(clip.surface.roughness_rise, 1000.0, 3, "mm"));
       },
       [](int clips, double measured) {
         return std::to_string(clips) + " clips, the rig's roughness rise at most " + fixedDecimals(measured, 2) + " x the input skinning's";
@@ -226,14 +231,9 @@ CheckResult checkStrain(const ValidationInputs& inputs, const ValidationConfig& 
   return surfaceCheck(
       checkAt<checkIndex("SKIN_STRAIN")>(), inputs, config,
       [](const ClipQuality& clip, CheckMeasurement* measurement) {
-        const double* edge = clip.surface.edge_strain;
-        const double* area = clip.surface.area_strain;
-        auto figures = [](const double* f) {
-          return "input " + fixedDecimals(100.0 * f[0], 2) + " %, dual quaternions " + fixedDecimals(100.0 * f[1], 2) +
-                 " %, centres of rotation " + fixedDecimals(100.0 * f[2], 2) + " %, rig " + fixedDecimals(100.0 * f[3], 2) + " %";
-        };
-        measurement->add(std::max(edge[3] / std::max(edge[0], kStrainFloor), area[3] / std::max(area[0], kStrainFloor)), clip.clip,
-                         "strain (95th percentile) of edge lengths " + figures(edge) + "; of triangle areas " + figures(area));
+        measurement->add(strainRatio(clip.surface), clip.clip,
+                         "strain (95th percentile) of edge lengths " + perSkinning(clip.surface.edge_strain, 100.0, 2, "%") +
+                             "; of triangle areas " + perSkinning(clip.surface.area_strain, 100.0, 2, "%"));
       },
       [](int clips, double measured) {
         return std::to_string(clips) + " clips, the rig's strain at most " + fixedDecimals(measured, 2) + " x the input skinning's";
