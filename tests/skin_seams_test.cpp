@@ -17,6 +17,7 @@
 #include "pipeline/bake.h"
 #include "pipeline/rom.h"
 #include "pipeline/seam_opening.h"
+#include "skin_bake_fixture.h"
 
 using namespace rigbake;
 
@@ -89,11 +90,6 @@ const RomPreset& seamTestRom() {
   return preset;
 }
 
-const RegionPreset& seamTestRegions() {
-  static const RegionPreset preset = readRegionPreset(test::presetsDir() + "/regions/body.json");
-  return preset;
-}
-
 // The arm clips of the default ROM appended as measure-only clips, as `bake --rom` does.
 void addArmRom(test::Resolved* r) {
   RomResult rom = buildRom(r->character, r->landmarks, seamTestRom());
@@ -106,15 +102,6 @@ void addArmRom(test::Resolved* r) {
                   rom.clips.end());
   REQUIRE(rom.clips.size() == 3);
   appendMeasureOnlyClips(&r->character, rom);
-}
-
-BakeResult bakeMeasured(const test::Resolved& r, ResponseMode response) {
-  const MuscleSet muscles = placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth);
-  BakeOptions options;
-  options.influences = 10;
-  options.response = response;
-  options.regions = resolveBodyRegions(r.character, r.landmarks, seamTestRegions());
-  return bakeCharacter(r.character, muscles, options);
 }
 
 // Every clip's seam opening under the rig, beyond the input skinning's, is at most 0.05 mm; returns
@@ -146,7 +133,7 @@ TEST_CASE("seams: a character split into one mesh per joint keeps its borders cl
     const SplitCharacter split = splitByDominantJoint(r.character);
     REQUIRE(split.character.meshes.size() >= r.character.meshes.size() + 5);
     test::Resolved variant{split.character, r.landmarks};
-    const BakeResult bake = bakeMeasured(variant, ResponseMode::kAuto);
+    const BakeResult bake = test::bakeWithBodyRegions(variant, ResponseMode::kAuto);
     // The split made borders where the input had one surface: they must be measured, and open by
     // nothing under the input's own skinning (both sides carry the same weights; KayKit's own UV seams
     // carry weights a few parts in 1e9 apart and open by 7e-9 m).
@@ -162,7 +149,7 @@ TEST_CASE("seams: the shared multi-mesh characters open no border under the rig"
     INFO(path);
     test::Resolved r = test::resolveShipped(path);
     addArmRom(&r);
-    CHECK(checkSeamsClosed(bakeMeasured(r, ResponseMode::kAuto)) > 100);
+    CHECK(checkSeamsClosed(test::bakeWithBodyRegions(r, ResponseMode::kAuto)) > 100);
   }
 }
 
@@ -171,8 +158,8 @@ TEST_CASE("seams: splitting a character into meshes leaves every vertex's muscle
   // surface: the same full-precision weights at every vertex, up to the order of sums.
   test::Resolved r = test::resolveShipped(test::sampleGlbPath());
   const SplitCharacter split = splitByDominantJoint(r.character);
-  const BakeResult whole = bakeMeasured(r, ResponseMode::kKeep);
-  const BakeResult pieces = bakeMeasured(test::Resolved{split.character, r.landmarks}, ResponseMode::kKeep);
+  const BakeResult whole = test::bakeWithBodyRegions(r, ResponseMode::kKeep);
+  const BakeResult pieces = test::bakeWithBodyRegions(test::Resolved{split.character, r.landmarks}, ResponseMode::kKeep);
   REQUIRE(whole.parts.size() == 1);
   REQUIRE(pieces.parts.size() > 10);
   int compared = 0;

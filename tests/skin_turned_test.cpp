@@ -7,11 +7,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "anatomy/body_regions.h"
-#include "anatomy/placement.h"
-#include "anatomy_fixture.h"
-#include "formats/preset_json.h"
-#include "pipeline/bake.h"
+#include "skin_bake_fixture.h"
 
 using namespace rigbake;
 
@@ -28,15 +24,6 @@ Character turned(Character character, const Eigen::Affine3d& t) {
   return character;
 }
 
-BakeResult bakeWithFigures(const test::Resolved& r) {
-  static const RegionPreset regions = readRegionPreset(test::presetsDir() + "/regions/body.json");
-  const MuscleSet muscles = placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth);
-  BakeOptions options;
-  options.influences = 10;
-  options.regions = resolveBodyRegions(r.character, r.landmarks, regions);
-  return bakeCharacter(r.character, muscles, options);
-}
-
 }  // namespace
 
 TEST_CASE("skin figures: the mannequin turned 70 degrees about a slanted axis and moved 1.2 m gives the same figures") {
@@ -45,8 +32,8 @@ TEST_CASE("skin figures: the mannequin turned 70 degrees about a slanted axis an
   t.rotate(Eigen::AngleAxisd(70.0 * M_PI / 180.0, Eigen::Vector3d(1.0, 2.0, 3.0).normalized()));
   t.pretranslate(Eigen::Vector3d(0.3, -0.2, 1.1));
   const test::Resolved moved = test::resolveWithShippedPresets(turned(original.character, t));
-  const BakeResult a = bakeWithFigures(original);
-  const BakeResult b = bakeWithFigures(moved);
+  const BakeResult a = test::bakeWithBodyRegions(original);
+  const BakeResult b = test::bakeWithBodyRegions(moved);
   size_t differing = 0, total = 0;
   for (size_t p = 0; p < a.parts.size(); ++p)
     for (size_t i = 0; i < a.parts[p].quantized.weights.size(); ++i, ++total)
