@@ -14,6 +14,7 @@
 
 #include "core/error.h"
 #include "anatomy_fixture.h"
+#include "character_variants.h"
 #include "cli_support.h"
 #include "formats/muscle_json.h"
 
@@ -28,50 +29,12 @@ struct Placed {
   MuscleSet muscles;
 };
 
-// The whole character (joints, meshes, the frame root joints' clips compose into) moved by `motion`.
-Character movedBy(Character c, const Eigen::Affine3d& motion) {
-  for (Eigen::Affine3d& bind : c.skeleton.bind_world) bind = motion * bind;
-  for (Eigen::Affine3d& parent : c.skeleton.root_parent_world) parent = motion * parent;
-  for (MeshPart& part : c.meshes) {
-    for (Eigen::Vector3d& p : part.positions) p = motion * p;
-  }
-  for (Eigen::Affine3d& placement : c.skin_placement) placement = motion * placement;
-  return c;
-}
-
-// A new armature root joint named `root` at `at` (scene space), under which the old roots hang: Blender's
-// armature origin at the feet, or a root bone a rig moved away. Every joint keeps its world bind, only
-// the hierarchy above them changes. Clips are left out: retargeting reads the bind pose only.
-Character withRootAt(Character c, const Eigen::Vector3d& at) {
-  Skeleton& s = c.skeleton;
-  auto shifted = [](int joint) { return joint < 0 ? joint : joint + 1; };
-  const Eigen::Affine3d root_parent = s.root_parent_world[0];
+// A new armature root joint at `at` (scene space), under which the old roots hang: Blender's armature
+// origin at the feet, or a root bone a rig moved away.
+Character withRootAt(const Character& c, const Eigen::Vector3d& at) {
   Trs root_local;
-  root_local.translation = root_parent.inverse() * at;
-  const Eigen::Affine3d root = root_parent * root_local.matrix();
-  for (int j = 0; j < s.size(); ++j) {
-    if (s.parents[j] >= 0) continue;
-    // The old root's local transform was composed into its own parent frame; express it in the new root's.
-    const Eigen::Affine3d local = root.inverse() * s.root_parent_world[j] * s.rest_local[j].matrix();
-    s.rest_local[j].translation = local.translation();
-    s.rest_local[j].rotation = Eigen::Quaterniond(local.linear() * s.rest_local[j].scale.cwiseInverse().asDiagonal());
-    s.root_parent_world[j] = root;
-  }
-  for (int& parent : s.parents) parent = parent < 0 ? 0 : parent + 1;
-  s.parents.insert(s.parents.begin(), -1);
-  s.names.insert(s.names.begin(), "root");
-  s.nodes.insert(s.nodes.begin(), -1);
-  s.bind_world.insert(s.bind_world.begin(), root);
-  s.rest_local.insert(s.rest_local.begin(), root_local);
-  s.root_parent_world.insert(s.root_parent_world.begin(), root_parent);
-  for (MeshPart& part : c.meshes) {
-    for (int& joint : part.skin_joints) joint = shifted(joint);
-    for (int& joint : part.joints) joint = shifted(joint);
-    part.rigid_joint = shifted(part.rigid_joint);
-  }
-  c.clips.clear();
-  for (auto& [bone, joint] : c.vrm_humanoid) joint = shifted(joint);
-  return c;
+  root_local.translation = c.skeleton.root_parent_world[0].inverse() * at;
+  return test::withNewRoot(c, root_local);
 }
 
 // The sample's joints under Blender/Rigify names (spine, spine.001, ..., upper_arm.L, forearm.L.001);
@@ -163,18 +126,18 @@ const std::vector<Placed>& characters() {
     add("sample", "Rigify names, root 1 m below the hips", [&](const Character& c, const LandmarkSet& l) {
       return withRootAt(withRigifyNames(c), below_hips(l));
     });
-    add("sample VRM 0.x", "turned 90 degrees", [&](const Character& c, const LandmarkSet&) { return movedBy(c, quarter_turn); });
+    add("sample VRM 0.x", "turned 90 degrees", [&](const Character& c, const LandmarkSet&) { return test::movedBy(c, quarter_turn); });
     add("sample VRM 0.x without upperChest", "root 1 m below the hips", [&](const Character& c, const LandmarkSet& l) {
       return withRootAt(c, below_hips(l));
     });
     add("CesiumMan.glb", "turned 90 degrees, scaled 100", [&](const Character& c, const LandmarkSet&) {
-      return movedBy(c, quarter_turn * Eigen::Scaling(100.0));
+      return test::movedBy(c, quarter_turn * Eigen::Scaling(100.0));
     });
     add("RobotExpressive.glb", "root 1 m below the hips", [&](const Character& c, const LandmarkSet& l) {
       return withRootAt(c, below_hips(l));
     });
     add("fbx/Male_Casual.fbx", "turned -90 degrees, root 1 m below the hips", [&](const Character& c, const LandmarkSet& l) {
-      return withRootAt(movedBy(c, quarter_turn.inverse()), quarter_turn.inverse() * below_hips(l));
+      return withRootAt(test::movedBy(c, quarter_turn.inverse()), quarter_turn.inverse() * below_hips(l));
     });
     for (Placed& v : variants) all.push_back(std::move(v));
     return all;

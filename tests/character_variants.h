@@ -1,0 +1,94 @@
+// Variants of a loaded character that a studio's export could give for the same body (issue 29 asks the
+// skin to be judged on them): moved and turned in its scene, or hung under a new armature root. Each
+// keeps every joint's world bind pose and every clip's world motion, so anything measured on the body
+// must come out as on the original.
+#pragma once
+
+#include <Eigen/Geometry>
+
+#include "anatomy/character.h"
+
+namespace rigbake::test {
+
+// The whole character (joints, meshes, the frame root joints' clips compose into) moved by `motion`. The
+// joints' local transforms, and so every clip, are unchanged: a root joint's frame is its parent node's
+// world transform.
+inline Character movedBy(Character c, const Eigen::Affine3d& motion) {
+  for (Eigen::Affine3d& bind : c.skeleton.bind_world) bind = motion * bind;
+  for (Eigen::Affine3d& parent : c.skeleton.root_parent_world) parent = motion * parent;
+  for (MeshPart& part : c.meshes) {
+    for (Eigen::Vector3d& p : part.positions) p = motion * p;
+  }
+  for (Eigen::Affine3d& placement : c.skin_placement) placement = motion * placement;
+  return c;
+}
+
+// A new armature root joint named `root`, with local transform `root_local` in the first root's parent
+// frame (a rotation and a translation: Blender's armature object turned a quarter about X, or a root
+// bone at the feet), under which the old roots hang. Every joint keeps its world bind pose; the old
+// roots' rest transforms and animation keys are re-expressed in the new root's frame, so every clip
+// moves every old joint as before (the new root is not animated).
+inline Character withNewRoot(Character c, const Trs& root_local) {
+  Skeleton& s = c.skeleton;
+  auto shifted = [](int joint) { return joint < 0 ? joint : joint + 1; };
+  const Eigen::Affine3d root_parent = s.root_parent_world[0];
+  const Eigen::Affine3d root = root_parent * root_local.matrix();
+  // An old root's local frame was its parent node's; `into_root[j]` takes it into the new root's. Rigid
+  // (root_local has no scale), so a rotation key turns by its linear part and a translation key moves as
+  // a point; scale keys are unchanged.
+  std::vector<Eigen::Affine3d> into_root(s.size(), Eigen::Affine3d::Identity());
+  for (int j = 0; j < s.size(); ++j) {
+    if (s.parents[j] >= 0) continue;
+    into_root[j] = root.inverse() * s.root_parent_world[j];
+    const Eigen::Affine3d local = into_root[j] * s.rest_local[j].matrix();
+    s.rest_local[j].translation = local.translation();
+    s.rest_local[j].rotation = Eigen::Quaterniond(local.linear() * s.rest_local[j].scale.cwiseInverse().asDiagonal());
+    s.root_parent_world[j] = root;
+  }
+  for (Clip& clip : c.clips) {
+    for (Track& track : clip.tracks) {
+      if (s.parents[track.joint] >= 0 || track.path == AnimatedPath::kScale) continue;
+      const Eigen::Affine3d& a = into_root[track.joint];
+      const bool cubic = track.interpolation == Interpolation::kCubicSpline;
+      if (track.path == AnimatedPath::kRotation) {
+        const Eigen::Quaterniond turn(a.linear());
+        for (size_t k = 0; k + 4 <= track.values.size(); k += 4) {
+          const Eigen::Quaterniond q(track.values[k + 3], track.values[k], track.values[k + 1], track.values[k + 2]);
+          // A cubic spline's tangents are derivatives of the quaternion: turned, not renormalized.
+          const Eigen::Quaterniond turned = turn * q;
+          track.values[k] = turned.x();
+          track.values[k + 1] = turned.y();
+          track.values[k + 2] = turned.z();
+          track.values[k + 3] = turned.w();
+        }
+      } else {
+        for (size_t k = 0; k + 3 <= track.values.size(); k += 3) {
+          const Eigen::Vector3d t(track.values[k], track.values[k + 1], track.values[k + 2]);
+          // A cubic spline's tangents are directions: turned, not moved.
+          const bool tangent = cubic && (k / 3) % 3 != 1;
+          const Eigen::Vector3d moved = tangent ? Eigen::Vector3d(a.linear() * t) : Eigen::Vector3d(a * t);
+          for (int i = 0; i < 3; ++i) track.values[k + i] = moved[i];
+        }
+      }
+    }
+  }
+  for (int& parent : s.parents) parent = parent < 0 ? 0 : parent + 1;
+  s.parents.insert(s.parents.begin(), -1);
+  s.names.insert(s.names.begin(), "root");
+  s.nodes.insert(s.nodes.begin(), -1);
+  s.bind_world.insert(s.bind_world.begin(), root);
+  s.rest_local.insert(s.rest_local.begin(), root_local);
+  s.root_parent_world.insert(s.root_parent_world.begin(), root_parent);
+  for (MeshPart& part : c.meshes) {
+    for (int& joint : part.skin_joints) joint = shifted(joint);
+    for (int& joint : part.joints) joint = shifted(joint);
+    part.rigid_joint = shifted(part.rigid_joint);
+  }
+  for (Clip& clip : c.clips) {
+    for (Track& track : clip.tracks) track.joint = shifted(track.joint);
+  }
+  for (auto& [bone, joint] : c.vrm_humanoid) joint = shifted(joint);
+  return c;
+}
+
+}  // namespace rigbake::test
