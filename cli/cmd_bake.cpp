@@ -347,10 +347,11 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
       ->capture_default_str();
   command->add_option("--fit-smoothness", options->fit_smoothness,
                       "Weight of the response fit's smoothness term (per metre of the root mean square umbrella Laplacian "
-                      "of the muscles' move along the normal; the body's volume change weighs 30 per unit): 0 fits volume "
-                      "alone; 300 kept the FBX characters within 1.1x plain skinning's roughness with less volume kept, "
-                      "3000 every tested character but the mannequin within 1.06x with little volume kept "
-                      "(docs/deformation-quality.md, \"The fit's smoothness term\")")
+                      "of the muscles' move along the normal, on a 1.8 m body: it scales with the body's height, so a "
+                      "character's unit does not matter; the body's volume change weighs 30 per unit): 0 fits volume "
+                      "alone; 300 keeps as much volume on the FBX characters within 1.3x plain skinning's roughness, "
+                      "1000 every tested character but the mannequin within 1.41x with less volume kept, 3000 within "
+                      "1.08x with little volume kept (docs/deformation-quality.md, \"The fit's smoothness term\")")
       ->check(CLI::Range(0.0, 1.0e6))
       ->capture_default_str();
   command->add_option("--fit-volume", options->fit_volume,

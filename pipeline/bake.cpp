@@ -260,7 +260,7 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
   if (options.fit.max_poses < 1 || options.fit.max_poses > 100000)
     failOption("fit_poses", "must be from 1 to 100000 (got " + std::to_string(options.fit.max_poses) + ")");
   if (!(options.fit.smoothness_weight >= 0.0 && options.fit.smoothness_weight <= 1e6))
-    failOption("fit_smoothness", "must be from 0 to 1000000 per metre");
+    failOption("fit_smoothness", "must be from 0 to 1000000 per metre of a 1.8 m body");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);

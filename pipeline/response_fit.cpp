@@ -122,10 +122,13 @@ struct FitProblem {
   const FitSurfaces& surfaces;
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
+  double skin_weight;  // options.skin_weight per metre of a body of kFitReferenceHeight: per body height
   // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
   // when there is no smoothness term.
   const std::vector<std::vector<std::vector<int>>>& rings;
-  double roughness_scale;  // options.smoothness_weight / sqrt(the fitted vertices of every part); 0: no term
+  // options.smoothness_weight (per metre of a body of kFitReferenceHeight) / sqrt(the fitted vertices of
+  // every part); 0: no term
+  double roughness_scale;
 };
 
 // One pose's share of the model (joined in pose order, so any thread count gives the same system).
@@ -396,14 +399,14 @@ void PoseRowBuilder::addSkinFloorHinges(const RigEvaluation& evaluation, bool me
     for (const SkinVertex& sv : surfaces.muscle_skin[m]) mean += sv.weight * s_.moved[sv.part][sv.vertex].dot(s_.normals[sv.part][sv.vertex]);
     mean /= skin_total;
     const double floor = compressed ? -problem_.compressed_limit : -problem_.hollow_limit;
-    const double slack = options.skin_weight * (mean - floor);
+    const double slack = problem_.skin_weight * (mean - floor);
     out->violation += std::pow(std::min(slack, 0.0), 2);
     if (mean - floor >= problem_.skin_band) continue;
     model.slack.push_back(slack);
     if (measure_only) continue;
     for (const SkinVertex& sv : surfaces.muscle_skin[m])
       addVertex(surfaces.parts[sv.part], sv.vertex, s_.normals[sv.part][sv.vertex], sv.weight / skin_total);
-    model.hinges.push_back(takeRow(options.skin_weight));
+    model.hinges.push_back(takeRow(problem_.skin_weight));
   }
 }
 
@@ -698,6 +701,10 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   prior.scale.resize(layout.unknowns());
   for (int u = 0; u < layout.unknowns(); ++u) prior.scale[u] = std::max(reach[u], 1e-3);
 
+  // The skin and smoothness rows weigh lengths against the volume rows' ratios: taken per body height
+  // (so much per metre of a 1.8 m body), a character's fit does not depend on its scene's unit. Per
+  // metre, a body in centimetres weighed them 10,000 times more and kept almost none of the volume.
+  const double per_height = kFitReferenceHeight / muscles->body_height;
   // The smoothness term's one-rings, over the whole surface's moving piece: only when there is the term.
   std::vector<std::vector<std::vector<int>>> rings;
   double roughness_scale = 0.0;
@@ -708,11 +715,12 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
       rings.push_back(oneRings(any ? part.patches[0].moving.triangles : std::vector<std::array<int, 3>>{}, part.moving_vertices.size()));
       if (any) fitted_vertices += part.patches[0].fitted.size();
     }
-    if (fitted_vertices > 0) roughness_scale = options.smoothness_weight / std::sqrt(static_cast<double>(fitted_vertices));
+    if (fitted_vertices > 0)
+      roughness_scale = options.smoothness_weight * per_height / std::sqrt(static_cast<double>(fitted_vertices));
   }
   const FitProblem problem{skeleton, *muscles, layout, options, frames, surfaces, fixed,
                            options.compressed_in_share * muscles->body_height, options.stretch_hollow_share * muscles->body_height,
-                           options.skin_band_share * muscles->body_height, rings, roughness_scale};
+                           options.skin_band_share * muscles->body_height, options.skin_weight * per_height, rings, roughness_scale};
   std::vector<PoseScratch> scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (PoseScratch& worker : scratch) worker = poseScratch(surfaces.parts, muscle_count);
   std::vector<double> rms(static_cast<size_t>(options.iterations) + 1, 0.0);

@@ -61,9 +61,9 @@ TEST_CASE("app: bakeJob names a bad option by its field, never by a command-line
   CHECK(invalidOption(request) == "fit_poses: must be from 1 to 100000 (got 0)");
   request = quickSampleBake();
   request.options.fit.smoothness_weight = -1.0;
-  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre");
+  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre of a 1.8 m body");
   request.options.fit.smoothness_weight = std::numeric_limits<double>::quiet_NaN();
-  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre");
+  CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre of a 1.8 m body");
   request = quickSampleBake();
   request.hits = test::presetsDir() + "/jiggle/biceps.json";  // never read: the check comes first
   CHECK(invalidOption(request) == "hits: needs a jiggle preset: hits kick jiggle joints");
