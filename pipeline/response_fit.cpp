@@ -122,12 +122,12 @@ struct FitProblem {
   const FitSurfaces& surfaces;
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
-  double skin_weight;  // options.skin_weight per metre of a body of kFitReferenceHeight: per body height
+  double skin_weight;  // options.skin_weight x kFitReferenceHeight / body height: per metre of this body
   // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
   // when there is no smoothness term.
   const std::vector<std::vector<std::vector<int>>>& rings;
-  // options.smoothness_weight (per metre of a body of kFitReferenceHeight) / sqrt(the fitted vertices of
-  // every part); 0: no term
+  // options.smoothness_weight x kFitReferenceHeight / body height (per metre of this body) / sqrt(the
+  // fitted vertices of every part); 0: no term
   double roughness_scale;
 };
 

@@ -184,7 +184,6 @@ CheckResult checkSeamOpening(const ValidationInputs& inputs, const ValidationCon
   return result;
 }
 
-
 // A per-clip check over the skin's surface figures, which only the clips with samples have:
 // `measure(clip, &measurement)` adds a clip's finding, `summary(clips, measured)` is the check's line.
 template <typename Measure, typename Summary>
@@ -223,7 +222,6 @@ CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationC
         return std::to_string(clips) + " clips, the rig's roughness rise at most " + fixedDecimals(measured, 2) + " x the input skinning's";
       });
 }
-
 
 // Skin stretched or squashed where plain skinning keeps it (docs/deformation-quality.md, "Strain"): the
 // larger of the edge-length and triangle-area ratios.

@@ -12,7 +12,6 @@
 #include "anatomy_fixture.h"
 #include "cli_support.h"
 #include "external_tools.h"
-#include "formats/preset_json.h"
 #include "formats/rom_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/rom.h"
