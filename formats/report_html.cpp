@@ -602,7 +602,7 @@ std::string skinSurfaceTable(const Report& report) {
       }
       html += "</tr>\n";
     };
-    row("roughness rise, mm", clip.surface.roughness_rise, 1000.0, kRoughnessFloor, roughness, "%.3f");
+    row("roughness rise, mm", clip.surface.roughness_rise, 1000.0, clip.surface.roughness_floor, roughness, "%.3f");
     row("edge strain, %", clip.surface.edge_strain, 100.0, kStrainFloor, strain, "%.1f");
     row("triangle-area strain, %", clip.surface.area_strain, 100.0, kStrainFloor, strain, "%.1f");
   }

@@ -554,7 +554,7 @@ void measureBakeFigures(const Character& character, const BakeOptions& options, 
   if (options.measure_quality && options.measure_skin) {
     measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result->quality);
     measureJointRegions(character, measured, clips, options.threads, &result->quality);
-    measureSurfaceFigures(character, measured, clips, character.skeleton.size(), 1e-6 * std::max(body_height, 1e-3), options.threads,
+    measureSurfaceFigures(character, measured, clips, character.skeleton.size(), body_height, options.threads,
                           &result->quality, options.creases);
   }
   timing->quality = lap();

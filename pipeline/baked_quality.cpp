@@ -520,7 +520,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
   measureJointRegions(character, parts, clips, options.threads, &out.quality);
   const std::vector<Crease> creases = resolveCreases(folded, landmarks, preset.creases);
-  measureSurfaceFigures(character, parts, clips, joint_count, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads,
+  measureSurfaceFigures(character, parts, clips, joint_count, landmarks.body.height, options.threads,
                         &out.quality, creases);
   out.measured = true;
   if (!options.pictures) return out;

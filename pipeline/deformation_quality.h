@@ -64,13 +64,16 @@ struct SeamOpening {
 // at its most deformed samples (surfaceSamples()). Skinnings in the order input (linear blend), dual
 // quaternions, centres of rotation, rig.
 constexpr int kSurfaceSkinnings = 4;
-// Below these a clip's plain skinning is as smooth (scene units of roughness rise) or as unstretched
+// Below these a clip's plain skinning is as smooth (a roughness rise of 0.01 mm on a body 1.8 m tall,
+// in proportion on any other, so that a character's unit does not change a ratio) or as unstretched
 // (a fraction of strain) as its bind pose, and a ratio to it says nothing: ratios of the rig's figure
 // to plain skinning's (validate's checks, bake's lines) take plain skinning's as at least these.
-constexpr double kRoughnessFloor = 1e-5;
+constexpr double kRoughnessFloorPerHeight = 1e-5 / 1.8;
 constexpr double kStrainFloor = 0.01;
 struct SurfaceFigures {
   bool measured = false;
+  // kRoughnessFloorPerHeight times the body's height, scene units.
+  double roughness_floor = 0.0;
   // The 95th percentile, over the skin that moves, of each welded vertex's roughness rise over the bind
   // pose (|umbrella Laplacian . normal| posed minus bind), scene units; the largest over the samples.
   double roughness_rise[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
@@ -93,7 +96,7 @@ struct SurfaceFigures {
 inline double rigOverPlain(const double (&figure)[kSurfaceSkinnings], double floor) {
   return figure[3] / std::max(figure[0], floor);
 }
-inline double roughnessRatio(const SurfaceFigures& f) { return rigOverPlain(f.roughness_rise, kRoughnessFloor); }
+inline double roughnessRatio(const SurfaceFigures& f) { return rigOverPlain(f.roughness_rise, f.roughness_floor); }
 inline double strainRatio(const SurfaceFigures& f) {
   return std::max(rigOverPlain(f.edge_strain, kStrainFloor), rigOverPlain(f.area_strain, kStrainFloor));
 }

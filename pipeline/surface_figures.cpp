@@ -262,10 +262,12 @@ std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& 
 }
 
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
-                           const std::vector<MeasuredClip>& clips, int skeleton_joints, double weld_tolerance, int threads,
+                           const std::vector<MeasuredClip>& clips, int skeleton_joints, double body_height, int threads,
                            DeformationQuality* quality, const std::vector<Crease>& creases) {
   assert(quality->clips.size() == clips.size());
   if (parts.empty()) return;
+  const double height = std::max(body_height, 1e-3);
+  const double weld_tolerance = 1e-6 * height;
   std::vector<SurfacePart> surfaces;
   double bind_volume = 0.0;
   std::vector<std::vector<Eigen::Vector3d>> bind_welded;
@@ -289,6 +291,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
     const auto [c, t] = samples[i];
     SurfaceFigures& surface = quality->clips[c].surface;
     surface.measured = true;
+    surface.roughness_floor = kRoughnessFloorPerHeight * height;
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       surface.roughness_rise[s] = std::max(surface.roughness_rise[s], figures[i].rise[s]);
       surface.edge_strain[s] = std::max(surface.edge_strain[s], figures[i].edge_strain[s]);

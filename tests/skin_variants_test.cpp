@@ -29,6 +29,13 @@ void checkSameFigures(const BakeResult& a, const BakeResult& b, double length_sc
     CHECK(y.body.rig.change == Approx(x.body.rig.change).margin(1e-5));
     REQUIRE(x.surface.measured);
     REQUIRE(y.surface.measured);
+    CHECK(y.surface.roughness_floor == Approx(length_scale * x.surface.roughness_floor).epsilon(1e-6));
+    CHECK(roughnessRatio(y.surface) == Approx(roughnessRatio(x.surface)).epsilon(1e-2));
+    // Where plain skinning leaves the skin as smooth as at bind (a limb one joint holds), the ratio is
+    // taken against the floor, which scales with the body: the same in any unit.
+    SurfaceFigures rigid_x = x.surface, rigid_y = y.surface;
+    rigid_x.roughness_rise[0] = rigid_y.roughness_rise[0] = 0.0;
+    CHECK(roughnessRatio(rigid_y) == Approx(roughnessRatio(rigid_x)).epsilon(1e-2));
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       INFO("skinning " << s);
       const double relative = s == 3 ? 1e-2 : 1e-3;
