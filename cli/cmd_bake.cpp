@@ -91,6 +91,29 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
     if (clip.surface.measured) std::cerr << ", centres of rotation " << 100.0 * clip.surface.centre_of_rotation.change << " %";
     std::cerr << std::noshowpos << " (largest change against the bind pose)\n";
   }
+  // The body region that loses most beyond plain skinning (measured in every bake), and whether that is
+  // more than validate's SKIN_REGION_VOLUME_LOSS allows: an error there, so the bake says it first.
+  const ClipQuality* region_clip = nullptr;
+  size_t region = 0;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    for (size_t r = 0; r < clip.regions.size() && r < bake.quality.regions.size(); ++r) {
+      if (!region_clip || regionLossBeyondInput(clip.regions[r]) > regionLossBeyondInput(region_clip->regions[region])) {
+        region_clip = &clip;
+        region = r;
+      }
+    }
+  }
+  if (region_clip) {
+    const SkinningVolumes& v = region_clip->regions[region];
+    const double allowed = checkAt<checkIndex("SKIN_REGION_VOLUME_LOSS")>().threshold;
+    const double loss = regionLossBeyondInput(v);
+    std::cerr << std::setprecision(2) << "body region losing most beyond plain skinning: '" << bake.quality.regions[region] << "' in '"
+              << region_clip->clip << "', " << loss << " points (input skinning " << std::showpos << 100.0 * v.input.change
+              << " %, rig " << 100.0 * v.rig.change << " %)" << std::noshowpos;
+    if (loss > allowed)
+      std::cerr << "; more than the " << std::setprecision(0) << allowed << " point `rigbake validate` allows by default (SKIN_REGION_VOLUME_LOSS, an error)";
+    std::cerr << "\n";
+  }
   // The occupied volume (each point inside the skin once): the rig against plain skinning over every
   // clip, and the clip whose signed figure counts most of the rig's volume twice.
   int occupied_clips = 0, occupied_better = 0, occupied_half = 0;

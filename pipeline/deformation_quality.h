@@ -52,6 +52,13 @@ struct SkinningVolumes {
   VolumeExtreme input, dual_quaternion, rig;
 };
 
+// How much more of its volume a body region loses under the rig than under the input skinning, in
+// percent points: max(0, min(input change, 0) - rig change) (a region growing is not a loss). What
+// validate's SKIN_REGION_VOLUME_LOSS judges and bake's region line names.
+inline double regionLossBeyondInput(const SkinningVolumes& v) {
+  return std::max(0.0, 100.0 * (std::min(v.input.change, 0.0) - v.rig.change));
+}
+
 // Skin vertices that share a bind position, their largest separation over a clip (pipeline/
 // seam_opening.h), in scene units; measured only where DeformationQuality::seam_places > 0.
 struct SeamOpening {

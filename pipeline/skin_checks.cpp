@@ -154,9 +154,7 @@ CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const Validati
   for (const ClipQuality& clip : quality.clips) {
     for (size_t r = 0; r < clip.regions.size(); ++r) {
       const SkinningVolumes& v = clip.regions[r];
-      // Loss beyond the input's own: what the rig loses below min(input change, 0), in points.
-      const double loss = std::max(0.0, 100.0 * (std::min(v.input.change, 0.0) - v.rig.change));
-      measurement.add(loss, clip.clip + "/" + quality.regions[r],
+      measurement.add(regionLossBeyondInput(v), clip.clip + "/" + quality.regions[r],
                       "input skinning " + fixedDecimals(100.0 * v.input.change, 2) + " %, dual quaternions " +
                           fixedDecimals(100.0 * v.dual_quaternion.change, 2) + " %, rig " + fixedDecimals(100.0 * v.rig.change, 2) +
                           " % at " + fixedDecimals(v.rig.time, 2) + " s");
