@@ -15,6 +15,7 @@
 #include "pipeline/quantize_for_motion.h"
 #include "pipeline/seam_opening.h"
 #include "pipeline/seam_rounding.h"
+#include "pipeline/skin_volume.h"
 #include "pipeline/surface_figures.h"
 
 namespace rigbake {
@@ -309,7 +310,7 @@ MuscleWeights weighMuscles(const Character& character, const MuscleSet& muscles,
   const std::vector<double> radii = muscleWeightRadii(character, muscles, body_height, options.threads);
   // One welded surface over every skinned part, so a border between meshes gets one muscle weight
   // (pipeline/body_surface.h).
-  BodySurface body = buildBodySurface(character, 1e-6 * std::max(body_height, 1e-3));
+  BodySurface body = buildBodySurface(character, bodyWeldTolerance(body_height));
   MuscleShares shares =
       muscleShares(skeleton, body.skin(character), body.graph, muscles, radii, options.weights, options.threads);
   result->muscles = muscles;
@@ -552,7 +553,7 @@ void measureBakeFigures(const Character& character, const BakeOptions& options, 
                                                     options.measure_quality, error_weights, options.threads);
   if (options.measure_quality) result->quality = std::move(measures.quality);
   if (options.measure_quality && options.measure_skin) {
-    measureSeams(character, measured, clips, 1e-6 * std::max(body_height, 1e-3), options.threads, &result->quality);
+    measureSeams(character, measured, clips, bodyWeldTolerance(body_height), options.threads, &result->quality);
     measureJointRegions(character, measured, clips, options.threads, &result->quality);
     measureSurfaceFigures(character, measured, clips, character.skeleton.size(), body_height, options.threads,
                           &result->quality, options.creases);

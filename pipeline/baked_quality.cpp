@@ -517,7 +517,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   const std::vector<MeasuredClip> clips = measuredClips(character, file, muscles, measured_muscles, &frames);
 
   out.quality = measureDeformationQuality(character, regions, parts, muscle_set, clips, options.threads);
-  measureSeams(character, parts, clips, 1e-6 * std::max(landmarks.body.height, 1e-3), options.threads, &out.quality);
+  measureSeams(character, parts, clips, bodyWeldTolerance(landmarks.body.height), options.threads, &out.quality);
   measureJointRegions(character, parts, clips, options.threads, &out.quality);
   const std::vector<Crease> creases = resolveCreases(folded, landmarks, preset.creases);
   measureSurfaceFigures(character, parts, clips, joint_count, landmarks.body.height, options.threads,
@@ -526,7 +526,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   if (!options.pictures) return out;
 
   // ---- Pictures ----
-  const double tolerance = 1e-6 * std::max(landmarks.body.height, 1e-3);
+  const double tolerance = bodyWeldTolerance(landmarks.body.height);
   std::vector<PicturePart> drawn;
   for (const MeasuredPart& part : parts) {
     PicturePart picture{&character.meshes[part.mesh_part], &part, buildVolumeSurface(character.meshes[part.mesh_part], tolerance), {}};

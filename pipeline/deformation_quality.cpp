@@ -729,7 +729,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
   assert(approximations <= kMaxApproximations);
   DeformationMeasures measures;
   DeformationQuality& figures = measures.quality;
-  const double weld_tolerance = 1e-6 * std::max(muscles.body_height, 1e-3);
+  const double weld_tolerance = bodyWeldTolerance(muscles.body_height);
   std::vector<size_t> kept;
   std::vector<PreparedPart> prepared = prepareSurfaces(character, regions, parts, quality, weld_tolerance, threads, &kept, &figures);
   const size_t region_count = kept.size();

@@ -7,6 +7,7 @@
 
 #include "pipeline/occupied_volume.h"
 #include "pipeline/parallel.h"
+#include "pipeline/skin_volume.h"
 
 namespace rigbake {
 namespace {
@@ -308,7 +309,7 @@ FitSurfaces buildFitSurfaces(const Character& character, const std::vector<BodyR
   for (const MeasuredPart& part : parts) mesh_parts.push_back(part.mesh_part);
   std::vector<std::vector<std::vector<int>>> region_triangles;
   for (const BodyRegion& region : regions) region_triangles.push_back(region.triangles);
-  out.measured = measuredSurfaces(character, mesh_parts, region_triangles, 1e-6 * std::max(muscles.body_height, 1e-3), threads);
+  out.measured = measuredSurfaces(character, mesh_parts, region_triangles, bodyWeldTolerance(muscles.body_height), threads);
   MeasuredSurfaces& measured = out.measured;
   std::vector<size_t> kept;
   for (size_t r = 0; r < regions.size(); ++r) {

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -31,6 +32,11 @@ struct VolumeSurface {
 // Welds vertices closer than `weld_tolerance` (scene units, on a grid of that size, as
 // pipeline/surface_graph.h does); drops triangles that welding makes degenerate.
 VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance);
+
+// The weld tolerance of a body `body_height` tall (scene units): 1e-6 of its height, taken as at least
+// 1 mm. Every skin figure, the fit's surfaces and the muscle weights weld at it, so they join the same
+// vertices in any unit.
+inline double bodyWeldTolerance(double body_height) { return 1e-6 * std::max(body_height, 1e-3); }
 
 // The given welded triangles (indices into surface.whole.triangles) and their boundary loops: edges
 // used by one of them only. Edges shared by three or more triangles are left as they are.

@@ -267,7 +267,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
   assert(quality->clips.size() == clips.size());
   if (parts.empty()) return;
   const double height = std::max(body_height, 1e-3);
-  const double weld_tolerance = 1e-6 * height;
+  const double weld_tolerance = bodyWeldTolerance(body_height);
   std::vector<SurfacePart> surfaces;
   double bind_volume = 0.0;
   std::vector<std::vector<Eigen::Vector3d>> bind_welded;

@@ -27,7 +27,7 @@ std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& 
 
 // Fills each clip's `surface` and `creases` in `quality` (clips in the same order). Muscle joints are
 // those at or above `skeleton_joints` in the parts' rig weights. `body_height` (scene units) sets the
-// weld tolerance (1e-6 of it) and the roughness floor (kRoughnessFloorPerHeight). Each crease (anatomy/creases.h) is
+// weld tolerance (bodyWeldTolerance()) and the roughness floor (kRoughnessFloorPerHeight). Each crease (anatomy/creases.h) is
 // measured at the sample of each clip where its bend peaks, when that is at least kMinCreaseBend
 // (pipeline/crease_contact.h). The same figures at any thread count.
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,

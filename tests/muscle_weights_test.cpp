@@ -12,6 +12,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/muscle_weights.h"
 #include "pipeline/pose.h"
+#include "pipeline/skin_volume.h"
 #include "pipeline/skinning.h"
 
 using namespace rigbake;
@@ -34,7 +35,7 @@ const WeightedMannequin& weightedMannequin() {
     w.placed = placeMuscles(w.r.character, w.r.landmarks, test::gowPreset(), Sides::kBoth);
     w.muscles = w.placed;
     w.radii = muscleWeightRadii(w.r.character, w.muscles, w.muscles.body_height);
-    w.body = buildBodySurface(w.r.character, 1e-6 * std::max(w.muscles.body_height, 1e-3));
+    w.body = buildBodySurface(w.r.character, bodyWeldTolerance(w.muscles.body_height));
     w.shares = muscleShares(w.r.character.skeleton, w.body.skin(w.r.character), w.body.graph, w.muscles, w.radii);
     chooseCarrierJoints(w.r.character, w.body, w.shares, &w.muscles);
     return w;
