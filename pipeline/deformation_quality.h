@@ -71,11 +71,15 @@ struct SeamOpening {
 // at its most deformed samples (surfaceSamples()). Skinnings in the order input (linear blend), dual
 // quaternions, centres of rotation, rig.
 constexpr int kSurfaceSkinnings = 4;
-// Below these a clip's plain skinning is as smooth (a roughness rise of 0.01 mm on a body 1.8 m tall,
-// in proportion on any other, so that a character's unit does not change a ratio) or as unstretched
-// (a fraction of strain) as its bind pose, and a ratio to it says nothing: ratios of the rig's figure
-// to plain skinning's (validate's checks, bake's lines) take plain skinning's as at least these.
-constexpr double kRoughnessFloorPerHeight = 1e-5 / 1.8;
+// The body height at which rigbake's length constants are stated: the fit's length weights
+// (pipeline/response_fit.h) and the roughness floor below. At another height they scale with it, as the
+// presets' offsets do (anatomy/presets.h reference_height), so that a character's unit changes nothing.
+constexpr double kReferenceBodyHeight = 1.8;
+// Below these a clip's plain skinning is as smooth (a roughness rise of 0.01 mm on a body
+// kReferenceBodyHeight tall, in proportion on any other) or as unstretched (a fraction of strain) as its
+// bind pose, and a ratio to it says nothing: ratios of the rig's figure to plain skinning's (validate's
+// checks, bake's lines) take plain skinning's as at least these.
+constexpr double kRoughnessFloorPerHeight = 1e-5 / kReferenceBodyHeight;
 constexpr double kStrainFloor = 0.01;
 struct SurfaceFigures {
   bool measured = false;

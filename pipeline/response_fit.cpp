@@ -122,11 +122,11 @@ struct FitProblem {
   const FitSurfaces& surfaces;
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
-  double skin_weight;  // options.skin_weight x kFitReferenceHeight / body height: per metre of this body
+  double skin_weight;  // options.skin_weight x kReferenceBodyHeight / body height: per metre of this body
   // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
   // when there is no smoothness term.
   const std::vector<std::vector<std::vector<int>>>& rings;
-  // options.smoothness_weight x kFitReferenceHeight / body height (per metre of this body) / sqrt(the
+  // options.smoothness_weight x kReferenceBodyHeight / body height (per metre of this body) / sqrt(the
   // fitted vertices of every part); 0: no term
   double roughness_scale;
 };
@@ -704,7 +704,7 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // The skin and smoothness rows weigh lengths against the volume rows' ratios: taken per body height
   // (so much per metre of a 1.8 m body), a character's fit does not depend on its scene's unit. Per
   // metre, a body in centimetres weighed them 10,000 times more and kept almost none of the volume.
-  const double per_height = kFitReferenceHeight / muscles->body_height;
+  const double per_height = kReferenceBodyHeight / muscles->body_height;
   // The smoothness term's one-rings, over the whole surface's moving piece: only when there is the term.
   std::vector<std::vector<std::vector<int>>> rings;
   double roughness_scale = 0.0;

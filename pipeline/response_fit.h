@@ -20,10 +20,6 @@
 
 namespace rigbake {
 
-// The body height at which the fit's length weights (skin_weight, smoothness_weight) are per metre; at
-// another height they scale with it, as the presets' offsets do (anatomy/presets.h reference_height).
-constexpr double kFitReferenceHeight = 1.8;
-
 struct ResponseFitOptions {
   // Poses fitted, chosen from every clip's sample times by chooseFitPoses(). Measured
   // (docs/muscle-model.md, "Poses"): 64 give the mannequin's figures of 160 within 0.01 points
@@ -60,7 +56,7 @@ struct ResponseFitOptions {
   // figures take it) may go in by at most compressed_in_share x body height while the muscle is
   // compressed by skin_min_compression or more, and by at most stretch_hollow_share x body height
   // while it is stretched: a compressed muscle does not deflate, a stretched one does not hollow the
-  // skin, at every fitted pose. skin_weight: per metre beyond the floor on a body kFitReferenceHeight
+  // skin, at every fitted pose. skin_weight: per metre beyond the floor on a body kReferenceBodyHeight
   // tall (per body height: the fit is the same in any unit); a muscle within
   // skin_band_share x body height of its floor is in the step's model.
   double skin_weight = 1000.0;
@@ -71,7 +67,7 @@ struct ResponseFitOptions {
   // Smoothness (issue 29's "lumps"): per fitted pose, the root mean square over the fitted muscles'
   // vertices of L(d) . n, the umbrella Laplacian of the rig's move d against the input skinning along the
   // normal (the quantity the roughness figure takes, pipeline/surface_figures.h), times smoothness_weight
-  // per metre of a body kFitReferenceHeight tall, against the body's volume change at body_weight. 0 (the default): no such term. It trades
+  // per metre of a body kReferenceBodyHeight tall, against the body's volume change at body_weight. 0 (the default): no such term. It trades
   // volume for smoothness on every character measured, differently per mesh (the Laplacian grows with
   // the square of the edge length): docs/deformation-quality.md, "The fit's smoothness term".
   double smoothness_weight = 0.0;
