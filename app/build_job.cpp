@@ -45,6 +45,8 @@ std::string bakeOnlyOptions(const BuildCharacter& character) {
   if (character.fit_poses != ResponseFitOptions{}.max_poses) text += " fit_poses " + std::to_string(character.fit_poses);
   if (character.fit_smoothness != ResponseFitOptions{}.smoothness_weight)
     text += " fit_smoothness " + std::to_string(character.fit_smoothness);
+  if (character.fit_roughness_cap != ResponseFitOptions{}.roughness_cap)
+    text += " fit_roughness_cap " + std::to_string(character.fit_roughness_cap);
   if (character.fit_occupied_volume) text += " fit_volume occupied";
   if (character.stats) text += " stats";
   if (character.packed) text += " packed";
@@ -139,6 +141,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   options.response = character.response;
   options.fit.max_poses = character.fit_poses;
   options.fit.smoothness_weight = character.fit_smoothness;
+  options.fit.roughness_cap = character.fit_roughness_cap;
   options.fit.occupied_volume = character.fit_occupied_volume;
   options.motion = character.muscle_motion;
   options.helper_joints = character.helper_joints;

@@ -66,8 +66,8 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", errc::MANIFEST_INVALID);
   in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "vrm",
-                "map", "regions", "jiggle", "hits", "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_volume", "stats", "packed",
-                "out", "characters"});
+                "map", "regions", "jiggle", "hits", "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "stats",
+                "packed", "out", "characters"});
   BuildManifest manifest;
   manifest.file = path;
   manifest.directory = directoryOf(path);
@@ -159,6 +159,12 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   if (in.has("fit_poses")) manifest.fit_poses = fitPosesOf(in.at("fit_poses"));
   auto smoothnessOf = [](const JsonReader& value) { return value.asNumberIn(0.0, 1e6, "per metre"); };
   if (in.has("fit_smoothness")) manifest.fit_smoothness = smoothnessOf(in.at("fit_smoothness"));
+  auto roughnessCapOf = [](const JsonReader& value) {
+    const double cap = value.asNumberIn(0.0, 100.0, "times plain skinning's roughness rise");
+    if (cap > 0.0 && cap < 1.0) value.fail("must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
+    return cap;
+  };
+  if (in.has("fit_roughness_cap")) manifest.fit_roughness_cap = roughnessCapOf(in.at("fit_roughness_cap"));
   auto occupiedOf = [](const JsonReader& value) {
     const std::string volume = value.asString();
     if (volume != "signed" && volume != "occupied") value.fail("must be \"signed\" or \"occupied\"");
@@ -180,7 +186,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     JsonReader item = characters.at(i);
     item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom",
                     "muscle_motion", "helper_joints", "response", "vrm", "map", "regions", "jiggle", "hits",
-                    "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_volume", "stats", "packed"});
+                    "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "stats", "packed"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -213,6 +219,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.fps = item.has("fps") ? fpsOf(item.at("fps")) : manifest.fps;
     c.fit_poses = item.has("fit_poses") ? fitPosesOf(item.at("fit_poses")) : manifest.fit_poses;
     c.fit_smoothness = item.has("fit_smoothness") ? smoothnessOf(item.at("fit_smoothness")) : manifest.fit_smoothness;
+    c.fit_roughness_cap = item.has("fit_roughness_cap") ? roughnessCapOf(item.at("fit_roughness_cap")) : manifest.fit_roughness_cap;
     c.fit_occupied_volume = item.has("fit_volume") ? occupiedOf(item.at("fit_volume")) : manifest.fit_occupied_volume;
     c.stats = item.has("stats") ? item.at("stats").asBool() : manifest.stats;
     c.packed = item.has("packed") ? item.at("packed").asBool() : manifest.packed;

@@ -262,6 +262,8 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     failOption("fit_poses", "must be from 1 to 100000 (got " + std::to_string(options.fit.max_poses) + ")");
   if (!(options.fit.smoothness_weight >= 0.0 && options.fit.smoothness_weight <= 1e6))
     failOption("fit_smoothness", "must be from 0 to 1000000 per metre of a 1.8 m body");
+  if (!(options.fit.roughness_cap == 0.0 || (options.fit.roughness_cap >= 1.0 && options.fit.roughness_cap <= 100.0)))
+    failOption("fit_roughness_cap", "must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);

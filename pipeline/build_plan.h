@@ -34,6 +34,7 @@ struct BuildCharacter {
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
+  double fit_roughness_cap = ResponseFitOptions{}.roughness_cap;
   bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;  // "fit_volume": "occupied"
   bool stats = false;        // also write OUT/NAME/stats.json
   bool packed = false;       // also write OUT/NAME/NAME.rbpk
@@ -56,6 +57,7 @@ struct BuildManifest {
   double fps = 0.0;
   int fit_poses = ResponseFitOptions{}.max_poses;
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
+  double fit_roughness_cap = ResponseFitOptions{}.roughness_cap;
   bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;
   bool stats = false, packed = false;
   std::string out;        // output root, resolved

@@ -3,9 +3,9 @@
 // volumes at the fitted poses (pipeline/fit_surfaces.h). Residuals: the whole body's volume change at
 // every fitted pose; one-sided rows for each region that leaves its dead zone and for each muscle whose
 // skin moves in further than its floor (a compressed muscle does not deflate, a stretched one does not
-// hollow); and a prior towards the talk's amplitudes (1 when compressed, 0 otherwise: a stretched muscle
-// does not thin unless volume asks for it). This file builds each pose's rows: the volumes and their
-// Jacobian in the amplitudes.
+// hollow); optionally the smoothness term's rows and the roughness cap's hinges; and a prior towards the
+// talk's amplitudes (1 when compressed, 0 otherwise: a stretched muscle does not thin unless volume asks
+// for it). This file builds each pose's rows: the volumes and their Jacobian in the amplitudes.
 #include "pipeline/response_fit.h"
 
 #include <Eigen/Dense>
@@ -20,6 +20,7 @@
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
 #include "pipeline/response_layout.h"
+#include "pipeline/surface_figures.h"
 #include "pipeline/surface_graph.h"
 
 namespace rigbake {
@@ -124,11 +125,16 @@ struct FitProblem {
   double compressed_limit, hollow_limit, skin_band;  // metres
   double skin_weight;  // options.skin_weight x kReferenceBodyHeight / body height: per metre of this body
   // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
-  // when there is no smoothness term.
+  // when there is neither the smoothness term nor the roughness cap.
   const std::vector<std::vector<std::vector<int>>>& rings;
   // options.smoothness_weight x kReferenceBodyHeight / body height (per metre of this body) / sqrt(the
   // fitted vertices of every part); 0: no term
   double roughness_scale;
+  // The roughness cap: its hinges' weight, scaled as roughness_scale is (0: no cap), the figures' floor
+  // (scene units) and, per fitted pose, the input skinning's roughness rise (empty without the cap).
+  double cap_scale;
+  double roughness_floor;
+  const std::vector<double>& input_rise;
 };
 
 // One pose's share of the model (joined in pose order, so any thread count gives the same system).
@@ -165,7 +171,9 @@ class PoseRowBuilder {
   double measureVolumes(std::vector<double>* region_volume);
   void addRegionHinges(const std::vector<double>& region_volume, bool measure_only, PoseRows* out);
   void addSkinFloorHinges(const RigEvaluation& evaluation, bool measure_only, PoseRows* out);
+  void rigMove(size_t p);
   void addRoughness(bool measure_only, PoseRows* out);
+  void addRoughnessCap(bool measure_only, PoseRows* out);
 
   const FitProblem& problem_;
   PoseScratch& s_;
@@ -410,6 +418,22 @@ void PoseRowBuilder::addSkinFloorHinges(const RigEvaluation& evaluation, bool me
   }
 }
 
+// The rig's move against the input skinning at each of part p's moving vertices (into s_.rig_move[p]):
+// sum over its fitted-muscle slots of w (M_muscle - M_carrier) p_bind.
+void PoseRowBuilder::rigMove(size_t p) {
+  const FitPart& part = problem_.surfaces.parts[p];
+  std::vector<Eigen::Vector3d>& move = s_.rig_move[p];
+  move.assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
+  for (size_t c = 0; c < part.moving_vertices.size(); ++c) {
+    if (!part.hasSlots(static_cast<int>(c))) continue;
+    const Eigen::Vector4d bind = part.mesh->positions[part.moving_vertices[c]].homogeneous();
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (const MuscleVertex* mv = part.slotsBegin(static_cast<int>(c)); mv != part.slotsEnd(static_cast<int>(c)); ++mv)
+      sum += mv->weight * (s_.apart[mv->muscle] * bind).head<3>();
+    move[c] = sum;
+  }
+}
+
 // The smoothness term: per fitted vertex v, r_v = scale * (d_v - mean over its ring of d_u) . n_v, d the
 // rig's move against the input skinning, linear in the amplitudes; its rows go into the pose's normal
 // equations (a few muscles per row, so each row's square is a small block).
@@ -439,16 +463,8 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
   std::vector<double> value;
   for (size_t p = 0; p < surfaces.parts.size(); ++p) {
     const FitPart& part = surfaces.parts[p];
-    std::vector<Eigen::Vector3d>& move = s_.rig_move[p];
-    move.assign(part.moving_vertices.size(), Eigen::Vector3d::Zero());
-    for (size_t c = 0; c < part.moving_vertices.size(); ++c) {
-      if (!part.hasSlots(static_cast<int>(c))) continue;
-      const Eigen::Vector4d bind = part.mesh->positions[part.moving_vertices[c]].homogeneous();
-      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-      for (const MuscleVertex* mv = part.slotsBegin(static_cast<int>(c)); mv != part.slotsEnd(static_cast<int>(c)); ++mv)
-        sum += mv->weight * (s_.apart[mv->muscle] * bind).head<3>();
-      move[c] = sum;
-    }
+    rigMove(p);
+    const std::vector<Eigen::Vector3d>& move = s_.rig_move[p];
     const std::vector<std::vector<int>>& rings = problem_.rings[p];
     for (int v : part.patches[0].fitted) {
       const std::vector<int>& ring = rings[static_cast<size_t>(v)];
@@ -507,6 +523,60 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
   }
 }
 
+// The roughness cap: per fitted vertex v, with a = (x_v - mean over its ring of x_u) . n_v for the input
+// skinning's positions x and e the same of the rig's move d (linear in the amplitudes), the rig's
+// |a + e| may exceed |a| by at most tau (ResponseFitOptions::roughness_cap): the hinges
+// |a| + tau - (a + e) >= 0 and |a| + tau + (a + e) >= 0. The rig's posed positions are the moving
+// vertices' single-precision ones (as the volumes take them) and a is read off them less d.
+void PoseRowBuilder::addRoughnessCap(bool measure_only, PoseRows* out) {
+  const FitSurfaces& surfaces = problem_.surfaces;
+  const ResponseFitOptions& options = problem_.options;
+  HingeLinearModel& model = out->model;
+  const double input_rise = std::max(problem_.input_rise[pose_], 0.0);
+  const double tau = options.roughness_cap * std::max(input_rise, problem_.roughness_floor) - input_rise;
+  const double weight = problem_.cap_scale;
+  for (size_t p = 0; p < surfaces.parts.size(); ++p) {
+    const FitPart& part = surfaces.parts[p];
+    rigMove(p);
+    const std::vector<Eigen::Vector3d>& move = s_.rig_move[p];
+    const std::vector<Float4>& planar = s_.planar[p];
+    auto posed = [&](int c) {
+      const float* at = planar[static_cast<size_t>(c)].v;
+      return Eigen::Vector3d(at[0], at[1], at[2]);
+    };
+    const std::vector<std::vector<int>>& rings = problem_.rings[p];
+    for (int v : part.patches[0].fitted) {
+      const std::vector<int>& ring = rings[static_cast<size_t>(v)];
+      const double length = s_.normals[p][v].norm();
+      if (ring.empty() || !(length > 0.0)) continue;
+      const Eigen::Vector3d n = s_.normals[p][v] / length;
+      const double share = 1.0 / static_cast<double>(ring.size());
+      Eigen::Vector3d ring_posed = Eigen::Vector3d::Zero(), ring_move = Eigen::Vector3d::Zero();
+      for (int u : ring) {
+        ring_posed += posed(u);
+        ring_move += move[static_cast<size_t>(u)];
+      }
+      const double rig = (posed(v) - share * ring_posed).dot(n);
+      const double e = (move[static_cast<size_t>(v)] - share * ring_move).dot(n);
+      const double a = rig - e;
+      const double bound = std::abs(a) + tau;
+      const double above = weight * (bound - rig), below = weight * (bound + rig);
+      out->violation += std::pow(std::min(above, 0.0), 2) + std::pow(std::min(below, 0.0), 2);
+      const double band = options.roughness_cap_band * weight * tau;
+      const bool near_above = above < band, near_below = below < band;
+      if (!near_above && !near_below) continue;
+      if (near_above) model.slack.push_back(above);
+      if (near_below) model.slack.push_back(below);
+      if (measure_only) continue;
+      addVertex(part, v, n, 1.0);
+      for (int u : ring) addVertex(part, u, n, -share);
+      const Eigen::VectorXd row = takeRow(weight);  // d(weight e) / d(amplitudes)
+      if (near_above) model.hinges.push_back(-row);
+      if (near_below) model.hinges.push_back(row);
+    }
+  }
+}
+
 // The pose's rows: the whole body's change always (weights make volumes fractions of their bind
 // volume), the regions' and the skin floors' hinges near or past their bounds. `measure_only` leaves
 // the Jacobian rows out: the last pass's would be thrown away.
@@ -534,8 +604,8 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
     model.rows.push_back(takeRow(body_weight));
   }
   addRegionHinges(region_volume, measure_only, out);
-  if (options.skin_weight > 0.0 || problem_.roughness_scale > 0.0) {
-    // Both the skin floors and the smoothness term read the rig's move against the input skinning,
+  if (options.skin_weight > 0.0 || problem_.roughness_scale > 0.0 || problem_.cap_scale > 0.0) {
+    // The skin floors, the smoothness term and the roughness cap read the rig's move against the input skinning,
     // through each muscle's skinning matrix less its carrier's.
     const int joint_count = problem_.skeleton.size();
     for (size_t m = 0; m < problem_.muscles.parts.size(); ++m)
@@ -543,6 +613,7 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
   }
   if (options.skin_weight > 0.0) addSkinFloorHinges(evaluation, measure_only, out);
   if (problem_.roughness_scale > 0.0) addRoughness(measure_only, out);
+  if (problem_.cap_scale > 0.0) addRoughnessCap(measure_only, out);
 }
 
 // Every pose's rows at the muscles' current responses, joined in pose order, on `threads` threads; the
@@ -705,22 +776,33 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // (so much per metre of a 1.8 m body), a character's fit does not depend on its scene's unit. Per
   // metre, a body in centimetres weighed them 10,000 times more and kept almost none of the volume.
   const double per_height = kReferenceBodyHeight / muscles->body_height;
-  // The smoothness term's one-rings, over the whole surface's moving piece: only when there is the term.
+  // The smoothness term's and the roughness cap's one-rings, over the whole surface's moving piece: only
+  // when there is either.
   std::vector<std::vector<std::vector<int>>> rings;
-  double roughness_scale = 0.0;
-  if (options.smoothness_weight > 0.0) {
+  double roughness_scale = 0.0, cap_scale = 0.0;
+  if (options.smoothness_weight > 0.0 || options.roughness_cap > 0.0) {
     size_t fitted_vertices = 0;
     for (const FitPart& part : surfaces.parts) {
       const bool any = part.patches[0].first_vertex >= 0;
       rings.push_back(oneRings(any ? part.patches[0].moving.triangles : std::vector<std::array<int, 3>>{}, part.moving_vertices.size()));
       if (any) fitted_vertices += part.patches[0].fitted.size();
     }
-    if (fitted_vertices > 0)
-      roughness_scale = options.smoothness_weight * per_height / std::sqrt(static_cast<double>(fitted_vertices));
+    const double per_vertex = fitted_vertices > 0 ? per_height / std::sqrt(static_cast<double>(fitted_vertices)) : 0.0;
+    roughness_scale = options.smoothness_weight * per_vertex;
+    if (options.roughness_cap > 0.0) cap_scale = options.roughness_cap_weight * per_vertex;
+  }
+  // The cap's bound at each fitted pose: the input skinning's roughness rise there, as the figure takes it.
+  std::vector<double> input_rise;
+  if (cap_scale > 0.0) {
+    std::vector<SkinFrame> input_frames(poses.size());
+    for (size_t i = 0; i < poses.size(); ++i)
+      for (int j = 0; j < skeleton.size(); ++j) input_frames[i].push_back(skinMatrix(poses[i], skeleton, j));
+    input_rise = inputRoughnessRise(character, parts, skeleton.size(), muscles->body_height, threads, input_frames);
   }
   const FitProblem problem{skeleton, *muscles, layout, options, frames, surfaces, fixed,
                            options.compressed_in_share * muscles->body_height, options.stretch_hollow_share * muscles->body_height,
-                           options.skin_band_share * muscles->body_height, options.skin_weight * per_height, rings, roughness_scale};
+                           options.skin_band_share * muscles->body_height, options.skin_weight * per_height, rings, roughness_scale,
+                           cap_scale, kRoughnessFloorPerHeight * muscles->body_height, input_rise};
   std::vector<PoseScratch> scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (PoseScratch& worker : scratch) worker = poseScratch(surfaces.parts, muscle_count);
   std::vector<double> rms(static_cast<size_t>(options.iterations) + 1, 0.0);

@@ -71,6 +71,17 @@ struct ResponseFitOptions {
   // volume for smoothness on every character measured, differently per mesh (the Laplacian grows with
   // the square of the edge length): docs/deformation-quality.md, "The fit's smoothness term".
   double smoothness_weight = 0.0;
+  // The roughness cap (issue 29's roughness goal as a constraint; `bake --fit-roughness-cap`): 0 (the
+  // default) for none, else a ratio c >= 1. At each fitted pose, with p the input skinning's roughness
+  // rise there (the figure, inputRoughnessRise()) and f the figures' floor (kRoughnessFloorPerHeight x
+  // body height), each fitted vertex's |L x . n| may exceed the input skinning's there by at most
+  // tau = c max(p, f) - p: a pair of hinges per vertex at roughness_cap_weight per metre of a body
+  // kReferenceBodyHeight tall / sqrt(fitted vertices), in the step's model within roughness_cap_band x tau
+  // of their bound. So over the fitted vertices the rig's rise stays within c times the input's; the
+  // volume rows get what the cap leaves. docs/deformation-quality.md, "The roughness cap".
+  double roughness_cap = 0.0;
+  double roughness_cap_weight = 30000.0;
+  double roughness_cap_band = 0.25;
   // Which volume the body's row keeps (issue 29's "measures a fit cannot game"): false, the signed volume,
   // in which skin pushed into a fold counts twice; true, the occupied one's gradient: at each fitted pose
   // the skin inside other skin under the starting (the talk's) response earns the row nothing, so

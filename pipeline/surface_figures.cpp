@@ -79,12 +79,15 @@ void appendStrains(const SurfacePart& part, const std::vector<Eigen::Vector3d>& 
   }
 }
 
-SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int skeleton_joints, double weld_tolerance, int threads) {
+// `with_centres`: the rotation centres, which only the centre-of-rotation skinning needs (on the
+// mannequin they cost ten times the rest of the part).
+SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int skeleton_joints, double weld_tolerance, int threads,
+                        bool with_centres) {
   SurfacePart part;
   part.surface = buildVolumeSurface(mesh, weld_tolerance);
   const size_t welded_count = static_cast<size_t>(part.surface.weldedCount());
   part.ring = oneRings(part.surface.whole.triangles, welded_count);
-  part.centres = optimizedRotationCentres(mesh, weights.input, threads);
+  if (with_centres) part.centres = optimizedRotationCentres(mesh, weights.input, threads);
   const int in_slots = weights.input.slots_per_vertex, rig_slots = weights.rig.slots_per_vertex;
   for (size_t w = 0; w < welded_count; ++w) {
     const size_t v = static_cast<size_t>(part.surface.vertex_of_weld[w]);
@@ -261,6 +264,25 @@ std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& 
   return picked;
 }
 
+std::vector<double> inputRoughnessRise(const Character& character, const std::vector<MeasuredPart>& parts, int skeleton_joints,
+                                       double body_height, int threads, const std::vector<SkinFrame>& frames) {
+  std::vector<double> rise(frames.size(), 0.0);
+  if (parts.empty()) return rise;
+  std::vector<SurfacePart> surfaces;
+  for (const MeasuredPart& part : parts)
+    surfaces.push_back(surfacePart(character.meshes[part.mesh_part], part, skeleton_joints, bodyWeldTolerance(body_height), threads, false));
+  parallelForEach(threads, frames.size(), [&](size_t i) {
+    std::vector<double> rises;
+    for (size_t p = 0; p < parts.size(); ++p) {
+      const std::vector<Eigen::Vector3d> posed = skinLinearBlend(character.meshes[parts[p].mesh_part].positions, parts[p].input, frames[i]);
+      const std::vector<double> r = roughness(surfaces[p], weldedPositions(surfaces[p].surface, posed));
+      for (size_t k = 0; k < r.size(); ++k) rises.push_back(r[k] - surfaces[p].bind_roughness[k]);
+    }
+    if (!rises.empty()) rise[i] = percentile95(&rises);
+  });
+  return rise;
+}
+
 void measureSurfaceFigures(const Character& character, const std::vector<MeasuredPart>& parts,
                            const std::vector<MeasuredClip>& clips, int skeleton_joints, double body_height, int threads,
                            DeformationQuality* quality, const std::vector<Crease>& creases) {
@@ -272,7 +294,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
   double bind_volume = 0.0;
   std::vector<std::vector<Eigen::Vector3d>> bind_welded;
   for (const MeasuredPart& part : parts) {
-    surfaces.push_back(surfacePart(character.meshes[part.mesh_part], part, skeleton_joints, weld_tolerance, threads));
+    surfaces.push_back(surfacePart(character.meshes[part.mesh_part], part, skeleton_joints, weld_tolerance, threads, true));
     bind_welded.push_back(weldedPositions(surfaces.back().surface, character.meshes[part.mesh_part].positions));
     bind_volume += enclosedVolume(surfaces.back().surface.whole, bind_welded.back());
   }

@@ -25,6 +25,13 @@ namespace rigbake {
 // times the rest of the bake.
 std::vector<size_t> surfaceSamples(const MeasuredClip& clip, const ClipQuality& figures);
 
+// The input skinning's roughness rise at each of `frames` (skinning matrices of the skeleton's joints):
+// the figure above, its 95th percentile over the skin that moves, unfloored. The response fit's
+// roughness cap (pipeline/response_fit.h) bounds the rig by it at the fitted poses, so both read one
+// definition of the figure.
+std::vector<double> inputRoughnessRise(const Character& character, const std::vector<MeasuredPart>& parts, int skeleton_joints,
+                                       double body_height, int threads, const std::vector<SkinFrame>& frames);
+
 // Fills each clip's `surface` and `creases` in `quality` (clips in the same order). Muscle joints are
 // those at or above `skeleton_joints` in the parts' rig weights. `body_height` (scene units) sets the
 // weld tolerance (bodyWeldTolerance()) and the roughness floor (kRoughnessFloorPerHeight). Each crease (anatomy/creases.h) is

@@ -65,6 +65,11 @@ TEST_CASE("app: bakeJob names a bad option by its field, never by a command-line
   request.options.fit.smoothness_weight = std::numeric_limits<double>::quiet_NaN();
   CHECK(invalidOption(request) == "fit_smoothness: must be from 0 to 1000000 per metre of a 1.8 m body");
   request = quickSampleBake();
+  request.options.fit.roughness_cap = 0.5;  // a cap below plain skinning's own roughness: nothing could meet it
+  CHECK(invalidOption(request) == "fit_roughness_cap: must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
+  request.options.fit.roughness_cap = std::numeric_limits<double>::quiet_NaN();
+  CHECK(invalidOption(request) == "fit_roughness_cap: must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
+  request = quickSampleBake();
   request.hits = test::presetsDir() + "/jiggle/biceps.json";  // never read: the check comes first
   CHECK(invalidOption(request) == "hits: needs a jiggle preset: hits kick jiggle joints");
   request = quickSampleBake();

@@ -326,6 +326,10 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
        "#/fit_smoothness"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_smoothness", "smooth"}}}}},
        "#/characters/0/fit_smoothness"},
+      {{{"out", "out"}, {"fit_roughness_cap", 0.5}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
+       "#/fit_roughness_cap: must be 0 (no cap) or from 1 to 100"},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_roughness_cap", 200}}}}},
+       "#/characters/0/fit_roughness_cap"},
       {{{"out", "out"}, {"fit_volume", "area"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/fit_volume"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_volume", true}}}}}, "#/characters/0/fit_volume"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fps", -1}}}}}, "#/characters/0/fps"},
@@ -504,7 +508,7 @@ TEST_CASE("cli build: --emit-ninja '' is USAGE, not a build") {
   CHECK(!fs::exists(dir / "p/out"));
 }
 
-TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, fps, fit poses and smoothness and spring bones, byte for byte as `rigbake bake` does") {
+TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, fps, fit poses, smoothness and roughness cap and spring bones, byte for byte as `rigbake bake` does") {
   test::TempDir dir;
   copyFile(test::sampleGlbPathForCli(), dir / "hero.glb");
   REQUIRE(runCli("sample --vrm 1 -o " + ext::shellQuote(dir / "hero1.vrm")).exit_code == 0);
@@ -513,7 +517,8 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
       {"out", "out"}, {"response", "keep"}, {"stats", true}, {"packed", true}, {"jiggle", "biceps"},
       {"characters",
        {{{"name", "hero"}, {"input", "hero.glb"}, {"influences", 4}, {"map", "gow"}, {"regions", "body"}, {"hits", "hits.json"},
-         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}, {"fit_volume", "occupied"}},
+         {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}, {"fit_roughness_cap", 1.5},
+         {"fit_volume", "occupied"}},
         {{"name", "springy"}, {"input", "hero1.vrm"}, {"vrm_springs_only", true}},
         {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}}}}};
   std::ofstream(dir / "manifest.json") << manifest.dump(2);
@@ -535,7 +540,7 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
     REQUIRE(run.exit_code == 0);
   };
   bake("hero.glb", "hero", "--influences 4 --map gow --regions body --hits " + ext::shellQuote(dir / "hits.json") +
-                               " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500 --fit-volume occupied");
+                               " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500 --fit-roughness-cap 1.5 --fit-volume occupied");
   bake("hero1.vrm", "springy", "--vrm-springs-only --response keep --influences 10");  // build's default: 10
   for (const std::string name : {"hero", "springy"}) {
     INFO(name);
