@@ -40,7 +40,8 @@ GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1:glibc.
 # The fit's smoothness term runs under the sanitizers in the build case that sets fit_smoothness; its
 # Male_Casual case (three FBX bakes, 20 s under the sanitizers) measures figures the release pass checks.
 # So does the occupied fit (the same build case sets fit_volume; the boxes test its exposure): its
-# Cyberpunk case is four bakes, 20 s under the sanitizers.
+# Cyberpunk case is four bakes, 20 s under the sanitizers. And the roughness cap (the build case sets
+# fit_roughness_cap): its Cyberpunk and Male_Casual case is four bakes, 20 s.
 echo "== AddressSanitizer + UBSan build, every test of rigbake's own code (at ${SECONDS} s)" >&2
 # The test binary and the CLI it runs: the benchmarks are not tests.
 bash "$repo/scripts/build.sh" asan rigbake_tests rigbake >/dev/null
@@ -48,7 +49,7 @@ echo "== sanitizer tests (at ${SECONDS} s)" >&2
 RIGBAKE_TEST_ASSETS="CesiumMan.glb,KayKit_Mannequin/manny_med_mod.gltf" \
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir "$repo/build-asan" --output-on-failure --parallel "$(nproc)" --timeout 900 --fixture-exclude-any suite_outputs \
-  --exclude-regex "Blender|Python ctypes|Khronos|doc evaluator:|WebAssembly build in node|suite_outputs_folder|Chromium|GLSL|100k vertices|byte-identical|1, 2 and 3 threads|--threads|a manifest of the three FBX characters|glTF-Transform optimize with rigbake's config|cli build: (gltf_weights|--emit-ninja writes|outputs replaced after|--shard|a manifest's .rom.)|gltfpack and glTF-Transform copy strip|a runtime bake evaluated by the C\\+\\+ runtime matches|fit smoothness: on Male_Casual|fit volume: on Cyberpunk"
+  --exclude-regex "Blender|Python ctypes|Khronos|doc evaluator:|WebAssembly build in node|suite_outputs_folder|Chromium|GLSL|100k vertices|byte-identical|1, 2 and 3 threads|--threads|a manifest of the three FBX characters|glTF-Transform optimize with rigbake's config|cli build: (gltf_weights|--emit-ninja writes|outputs replaced after|--shard|a manifest's .rom.)|gltfpack and glTF-Transform copy strip|a runtime bake evaluated by the C\\+\\+ runtime matches|fit smoothness: on Male_Casual|fit volume: on Cyberpunk|fit roughness cap: at 1.2"
 
 # libFuzzer targets built with clang (fuzz/, tree build-fuzz/): every seed in tests/fuzz/ (the regression
 # inputs among them), then 15 s of mutation per target, two targets at a time on two cores. Any crash,
