@@ -387,8 +387,8 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "1.2); the muscles then keep what volume they can within it. 0: no bound. Measured on eight "
                       "characters at 1.2: every clip within 1.2x plain skinning's roughness (without the cap 77 of 128), "
                       "but the rig's volume change is 0.93 of plain skinning's on the median clip instead of 0.66, and 1 "
-                      "of 20 arm clips keeps half of it instead of 7; slower on fine meshes (the 12k-vertex sample: "
-                      "0.2 -> 2 s) (docs/deformation-quality.md, \"The roughness cap\")")
+                      "of 20 arm clips keeps half of it instead of 7 (docs/deformation-quality.md, \"The roughness "
+                      "cap\")")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
   command->add_option("--fit-volume", options->fit_volume,

@@ -31,6 +31,20 @@ void addGram(const Eigen::MatrixXd& rows, Eigen::MatrixXd* normal) {
   if (rows.rows() > 0) normal->selfadjointView<Eigen::Lower>().rankUpdate(rows.transpose());
 }
 
+// Adds the sparse rows with keep[r] set, rowᵀ row each, to the lower triangle of `normal`; and minus
+// row times its slack to `gradient` when that is given.
+void addSparseGram(const std::vector<SparseRow>& rows, const std::vector<char>& keep, const std::vector<double>& slack,
+                   Eigen::MatrixXd* normal, Eigen::VectorXd* gradient) {
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (!keep[r]) continue;
+    const auto& entries = rows[r].entries;
+    for (size_t a = 0; a < entries.size(); ++a) {
+      for (size_t b = 0; b <= a; ++b) (*normal)(entries[a].first, entries[b].first) += entries[a].second * entries[b].second;
+      if (gradient) (*gradient)[entries[a].first] -= entries[a].second * slack[r];
+    }
+  }
+}
+
 // The damped normal equations of the kept rows and the prior at θ (lower triangle, symmetric in use).
 struct NormalEquations {
   Eigen::MatrixXd normal;
@@ -41,7 +55,7 @@ struct NormalEquations {
 // unknown the solution carries past a bound is held there and the free ones solved again with the held
 // ones' pull, until none crosses (at most one pass per unknown, as each pass holds one more).
 Eigen::VectorXd boundedStep(const NormalEquations& equations, const HingeLinearModel& model, const std::vector<char>& active,
-                            const Eigen::VectorXd& theta, const HingeBounds& bounds) {
+                            const std::vector<char>& sparse_active, const Eigen::VectorXd& theta, const HingeBounds& bounds) {
   const Eigen::Index unknowns = theta.size();
   Eigen::MatrixXd n = equations.normal;
   const Eigen::MatrixXd kept_hinges = stackRows(model.hinges, &active, unknowns);
@@ -50,7 +64,8 @@ Eigen::VectorXd boundedStep(const NormalEquations& equations, const HingeLinearM
     if (active[h]) kept_slack[static_cast<Eigen::Index>(next++)] = model.slack[h];
   }
   addGram(kept_hinges, &n);
-  const Eigen::VectorXd g = equations.gradient - kept_hinges.transpose() * kept_slack;
+  Eigen::VectorXd g = equations.gradient - kept_hinges.transpose() * kept_slack;
+  addSparseGram(model.sparse_hinges, sparse_active, model.sparse_slack, &n, &g);
   n.triangularView<Eigen::StrictlyUpper>() = n.transpose();
   std::vector<int> held(static_cast<size_t>(unknowns), 0);  // 0 free, -1 at its lower bound, +1 at its upper bound
   auto heldAt = [&](Eigen::Index u) { return held[u] < 0 ? bounds.lower[u] : bounds.upper[u]; };
@@ -96,6 +111,7 @@ Eigen::VectorXd hingeStep(const HingeLinearModel& model, const Eigen::VectorXd& 
                           const HingeBounds& bounds, double damping, int hinge_passes) {
   const Eigen::Index unknowns = theta.size();
   assert(model.rows.size() == model.rhs.size() && model.hinges.size() == model.slack.size());
+  assert(model.sparse_hinges.size() == model.sparse_slack.size());
   const Eigen::MatrixXd rows = stackRows(model.rows, nullptr, unknowns);
   NormalEquations equations;
   equations.normal = Eigen::MatrixXd::Zero(unknowns, unknowns);
@@ -113,13 +129,16 @@ Eigen::VectorXd hingeStep(const HingeLinearModel& model, const Eigen::VectorXd& 
   // it, so an unknown that only a violated hinge moves is damped like the others.
   std::vector<char> active(model.hinges.size(), 0);
   for (size_t h = 0; h < model.hinges.size(); ++h) active[h] = model.slack[h] < 0.0;
+  std::vector<char> sparse_active(model.sparse_hinges.size(), 0);
+  for (size_t h = 0; h < model.sparse_hinges.size(); ++h) sparse_active[h] = model.sparse_slack[h] < 0.0;
   Eigen::MatrixXd start = equations.normal;
   addGram(stackRows(model.hinges, &active, unknowns), &start);
+  addSparseGram(model.sparse_hinges, sparse_active, model.sparse_slack, &start, nullptr);
   const Eigen::VectorXd damping_diagonal = damping * start.diagonal().cwiseMax(1e-12);
   for (Eigen::Index u = 0; u < unknowns; ++u) equations.normal(u, u) += damping_diagonal[u];
 
   // The hinges' active set: those the step would leave violated, until it settles.
-  Eigen::VectorXd step = boundedStep(equations, model, active, theta, bounds);
+  Eigen::VectorXd step = boundedStep(equations, model, active, sparse_active, theta, bounds);
   for (int pass = 1; pass < hinge_passes; ++pass) {
     bool changed = false;
     for (size_t h = 0; h < model.hinges.size(); ++h) {
@@ -129,8 +148,15 @@ Eigen::VectorXd hingeStep(const HingeLinearModel& model, const Eigen::VectorXd& 
         changed = true;
       }
     }
+    for (size_t h = 0; h < model.sparse_hinges.size(); ++h) {
+      const char violated = model.sparse_slack[h] + model.sparse_hinges[h].dot(step) < 0.0;
+      if (violated != sparse_active[h]) {
+        sparse_active[h] = violated;
+        changed = true;
+      }
+    }
     if (!changed) break;
-    step = boundedStep(equations, model, active, theta, bounds);
+    step = boundedStep(equations, model, active, sparse_active, theta, bounds);
   }
   return step;
 }

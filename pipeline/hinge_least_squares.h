@@ -19,18 +19,33 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <utility>
 #include <vector>
 
 namespace rigbake {
 
+// A row given by its nonzero entries, (unknown, value) with the unknowns ascending and distinct.
+struct SparseRow {
+  std::vector<std::pair<Eigen::Index, double>> entries;
+  double dot(const Eigen::VectorXd& x) const {
+    double sum = 0.0;
+    for (const auto& [u, value] : entries) sum += value * x[u];
+    return sum;
+  }
+};
+
 // The residuals linearized at a point θ. Kept row i asks rows[i] · step = rhs[i] (rhs is minus the
 // residual at θ); hinge h asks slack[h] + hinges[h] · step >= 0 and counts its square while that fails.
-// Every row has as many entries as there are unknowns.
+// Every row has as many entries as there are unknowns. Hinges that touch a few of many unknowns may
+// come sparse instead (sparse_hinges, sparse_slack; the response fit's roughness cap has tens of thousands,
+// each on a few muscles' keys): the same, their squares summed after the dense hinges'.
 struct HingeLinearModel {
   std::vector<Eigen::VectorXd> rows;
   std::vector<double> rhs;
   std::vector<Eigen::VectorXd> hinges;
   std::vector<double> slack;
+  std::vector<SparseRow> sparse_hinges;
+  std::vector<double> sparse_slack;
 };
 
 // The prior's residual for unknown u: weight · (θ_u - target[u]) · scale[u]. `scale` says how strongly

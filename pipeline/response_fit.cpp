@@ -167,6 +167,7 @@ class PoseRowBuilder {
   void addBodyVertex(size_t p, int w);
   void addInnerVertex(size_t p, int w);
   Eigen::VectorXd takeRow(double weight);
+  SparseRow takeSparseRow(double weight);
   Eigen::VectorXd volumeJacobian(size_t k, double weight);
   double measureVolumes(std::vector<double>* region_volume);
   void addRegionHinges(const std::vector<double>& region_volume, bool measure_only, PoseRows* out);
@@ -265,6 +266,35 @@ Eigen::VectorXd PoseRowBuilder::takeRow(double weight) {
     sum = MuscleSums{};
   }
   return jacobian;
+}
+
+// takeRow()'s row as its nonzero entries: a vertex's row touches the keys of the few muscles that move
+// it and its ring.
+SparseRow PoseRowBuilder::takeSparseRow(double weight) {
+  const ResponseLayout& layout = problem_.layout;
+  SparseRow row;
+  for (size_t m = 0; m < problem_.muscles.parts.size(); ++m) {
+    if (layout.kind[m] < 0) continue;
+    MuscleSums& sum = s_.sums[m];
+    if (sum.up == 0.0 && sum.side == 0.0 && sum.scale == 0.0) continue;
+    const MuscleKeyMotion& motion = s_.key_motion[m];
+    for (int k = 0; k < kKeys; ++k) {
+      if (!keyMoves(motion, k)) continue;
+      row.entries.emplace_back(layout.kind[m] * kKeys + k,
+                               weight * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale));
+    }
+    sum = MuscleSums{};
+  }
+  // Both sides' muscles share their kind's keys: ascending, each unknown once (the sums in muscle order,
+  // as takeRow() adds them).
+  std::stable_sort(row.entries.begin(), row.entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  size_t kept = 0;
+  for (size_t i = 0; i < row.entries.size(); ++i) {
+    if (kept > 0 && row.entries[kept - 1].first == row.entries[i].first) row.entries[kept - 1].second += row.entries[i].second;
+    else row.entries[kept++] = row.entries[i];
+  }
+  row.entries.resize(kept);
+  return row;
 }
 
 // weight * d(volume of patch k)/d(amplitudes), summed over the parts.
@@ -565,14 +595,20 @@ void PoseRowBuilder::addRoughnessCap(bool measure_only, PoseRows* out) {
       const double band = options.roughness_cap_band * weight * tau;
       const bool near_above = above < band, near_below = below < band;
       if (!near_above && !near_below) continue;
-      if (near_above) model.slack.push_back(above);
-      if (near_below) model.slack.push_back(below);
       if (measure_only) continue;
       addVertex(part, v, n, 1.0);
       for (int u : ring) addVertex(part, u, n, -share);
-      const Eigen::VectorXd row = takeRow(weight);  // d(weight e) / d(amplitudes)
-      if (near_above) model.hinges.push_back(-row);
-      if (near_below) model.hinges.push_back(row);
+      const SparseRow row = takeSparseRow(weight);  // d(weight e) / d(amplitudes)
+      if (near_above) {
+        SparseRow negated = row;
+        for (auto& entry : negated.entries) entry.second = -entry.second;
+        model.sparse_hinges.push_back(std::move(negated));
+        model.sparse_slack.push_back(above);
+      }
+      if (near_below) {
+        model.sparse_hinges.push_back(row);
+        model.sparse_slack.push_back(below);
+      }
     }
   }
 }
@@ -647,6 +683,8 @@ HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& 
     model.slack.insert(model.slack.end(), pose.model.slack.begin(), pose.model.slack.end());
     for (Eigen::VectorXd& row : pose.model.rows) model.rows.push_back(std::move(row));
     for (Eigen::VectorXd& row : pose.model.hinges) model.hinges.push_back(std::move(row));
+    model.sparse_slack.insert(model.sparse_slack.end(), pose.model.sparse_slack.begin(), pose.model.sparse_slack.end());
+    for (SparseRow& row : pose.model.sparse_hinges) model.sparse_hinges.push_back(std::move(row));
   }
   // The smoothness rows' normal equations N, g as rows: N = V L V^T, rows sqrt(l) v^T with right-hand
   // sides -(v . g) / sqrt(l), whose squares are the rows' own (the objective has them already).

@@ -163,6 +163,48 @@ TEST_CASE("hinge fit: a hinge counts when the optimum violates it and not when i
   CHECK(5.0 + capped[0] == Approx((2.0 + 100.0 * 3.0) / 101.0).margin(1e-12));
 }
 
+TEST_CASE("hinge fit: sparse hinges step as the same hinges dense, beside dense ones", "[hinge-least-squares]") {
+  // Five unknowns pulled to 1, 2, ..., 5 by kept rows; hinges x0 + x3 <= 4 (violated by the pull),
+  // x1 - x4 >= 0 (violated) and x2 <= 10 (never): each once dense and once sparse, in either mix.
+  const Eigen::Index n = 5;
+  HingeLinearModel base;
+  for (Eigen::Index u = 0; u < n; ++u) {
+    base.rows.push_back(Eigen::VectorXd::Unit(n, u));
+    base.rhs.push_back(static_cast<double>(u + 1));
+  }
+  const std::vector<SparseRow> sparse = {{{{0, -3.0}, {3, -3.0}}}, {{{1, 2.0}, {4, -2.0}}}, {{{2, -1.0}}}};
+  const std::vector<double> slack = {3.0 * 4.0, 0.0, 10.0};
+  auto dense = [&](const SparseRow& row) {
+    Eigen::VectorXd out = Eigen::VectorXd::Zero(n);
+    for (const auto& [u, value] : row.entries) out[u] = value;
+    return out;
+  };
+  const Eigen::VectorXd theta = Eigen::VectorXd::Zero(n);
+  HingeLinearModel all_dense = base, all_sparse = base, mixed = base;
+  for (size_t h = 0; h < sparse.size(); ++h) {
+    all_dense.hinges.push_back(dense(sparse[h]));
+    all_dense.slack.push_back(slack[h]);
+    all_sparse.sparse_hinges.push_back(sparse[h]);
+    all_sparse.sparse_slack.push_back(slack[h]);
+    if (h == 1) {
+      mixed.hinges.push_back(dense(sparse[h]));
+      mixed.slack.push_back(slack[h]);
+    } else {
+      mixed.sparse_hinges.push_back(sparse[h]);
+      mixed.sparse_slack.push_back(slack[h]);
+    }
+  }
+  const Eigen::VectorXd expected = hingeStep(all_dense, theta, noPrior(n), unbounded(n), 0.0);
+  // The hinges pulled the step: x0 + x3 = 1 + 4 unpulled, and x1 < x4 unpulled.
+  CHECK(expected[0] + expected[3] < 5.0 - 0.1);
+  CHECK(expected[4] - expected[1] < 3.0 - 0.1);
+  CHECK(expected[2] == Approx(3.0).margin(1e-12));
+  for (const HingeLinearModel* model : {&all_sparse, &mixed}) {
+    const Eigen::VectorXd step = hingeStep(*model, theta, noPrior(n), unbounded(n), 0.0);
+    for (Eigen::Index u = 0; u < n; ++u) CHECK(step[u] == Approx(expected[u]).margin(1e-12));
+  }
+}
+
 TEST_CASE("hinge fit: a bound holds an unknown and the others are solved again with it held", "[hinge-least-squares]") {
   // min (x - 5)² with x <= 2: exactly on the bound.
   HingeTestProblem single;
