@@ -167,7 +167,7 @@ class PoseRowBuilder {
   void addBodyVertex(size_t p, int w);
   void addInnerVertex(size_t p, int w);
   Eigen::VectorXd takeRow(double weight);
-  SparseRow takeSparseRow(double weight);
+  SparseRow laplacianRow(const FitPart& part, int v, const std::vector<int>& ring, const Eigen::Vector3d& n, double weight);
   Eigen::VectorXd volumeJacobian(size_t k, double weight);
   double measureVolumes(std::vector<double>* region_volume);
   void addRegionHinges(const std::vector<double>& region_volume, bool measure_only, PoseRows* out);
@@ -268,25 +268,39 @@ Eigen::VectorXd PoseRowBuilder::takeRow(double weight) {
   return jacobian;
 }
 
-// takeRow()'s row as its nonzero entries: a vertex's row touches the keys of the few muscles that move
-// it and its ring.
-SparseRow PoseRowBuilder::takeSparseRow(double weight) {
+// weight * d((d_v - mean over its ring of d_u) . n)/d(amplitudes), d the rig's move against the input
+// skinning: the smoothness term's and the roughness cap's row at fitted vertex v, as its entries over the
+// keys that move at this pose (those of the few muscles that move v and its ring), unknowns ascending.
+// Both sides' muscles share their kind's keys: such entries are summed in the order the muscles are met.
+SparseRow PoseRowBuilder::laplacianRow(const FitPart& part, int v, const std::vector<int>& ring, const Eigen::Vector3d& n, double weight) {
   const ResponseLayout& layout = problem_.layout;
+  const double share = 1.0 / static_cast<double>(ring.size());
+  auto touch = [&](int c, double factor) {
+    for (const MuscleVertex* mv = part.slotsBegin(c); mv != part.slotsEnd(c); ++mv) {
+      if (!s_.muscle_touched[mv->muscle]) {
+        s_.muscle_touched[mv->muscle] = 1;
+        s_.touched_muscles.push_back(mv->muscle);
+      }
+    }
+    addVertex(part, c, n, factor);
+  };
+  touch(v, 1.0);
+  for (int u : ring) touch(u, -share);
   SparseRow row;
-  for (size_t m = 0; m < problem_.muscles.parts.size(); ++m) {
-    if (layout.kind[m] < 0) continue;
+  for (int m : s_.touched_muscles) {
+    s_.muscle_touched[m] = 0;
     MuscleSums& sum = s_.sums[m];
-    if (sum.up == 0.0 && sum.side == 0.0 && sum.scale == 0.0) continue;
-    const MuscleKeyMotion& motion = s_.key_motion[m];
-    for (int k = 0; k < kKeys; ++k) {
-      if (!keyMoves(motion, k)) continue;
-      row.entries.emplace_back(layout.kind[m] * kKeys + k,
-                               weight * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale));
+    const int kind = layout.kind[m];
+    if (kind >= 0) {
+      const MuscleKeyMotion& motion = s_.key_motion[m];
+      for (int k = 0; k < kKeys; ++k) {
+        if (!keyMoves(motion, k)) continue;
+        row.entries.emplace_back(kind * kKeys + k, weight * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale));
+      }
     }
     sum = MuscleSums{};
   }
-  // Both sides' muscles share their kind's keys: ascending, each unknown once (the sums in muscle order,
-  // as takeRow() adds them).
+  s_.touched_muscles.clear();
   std::stable_sort(row.entries.begin(), row.entries.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   size_t kept = 0;
   for (size_t i = 0; i < row.entries.size(); ++i) {
@@ -489,8 +503,6 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
     out->rough_normal = Eigen::MatrixXd::Zero(active, active);
     out->rough_gradient = Eigen::VectorXd::Zero(active);
   }
-  std::vector<int> index;
-  std::vector<double> value;
   for (size_t p = 0; p < surfaces.parts.size(); ++p) {
     const FitPart& part = surfaces.parts[p];
     rigMove(p);
@@ -510,44 +522,12 @@ void PoseRowBuilder::addRoughness(bool measure_only, PoseRows* out) {
       const double residual = scale * (move[v] - share * mean).dot(n);
       out->rough_square += residual * residual;
       if (measure_only) continue;
-      auto touch = [&](int c, double factor) {
-        for (const MuscleVertex* mv = part.slotsBegin(c); mv != part.slotsEnd(c); ++mv) {
-          if (!s_.muscle_touched[mv->muscle]) {
-            s_.muscle_touched[mv->muscle] = 1;
-            s_.touched_muscles.push_back(mv->muscle);
-          }
-        }
-        addVertex(part, c, n, factor);
-      };
-      touch(v, 1.0);
-      for (int u : ring) touch(u, -share);
-      index.clear();
-      value.clear();
-      for (int m : s_.touched_muscles) {
-        s_.muscle_touched[m] = 0;
-        MuscleSums& sum = s_.sums[m];
-        const MuscleKeyMotion& motion = s_.key_motion[m];
-        const int kind = layout.kind[m];
-        if (kind >= 0) {
-          for (int k = 0; k < kKeys; ++k) {
-            if (!keyMoves(motion, k)) continue;  // not among the pose's rough_unknowns
-            const double entry = scale * (motion.up[k] * sum.up + motion.side[k] * sum.side + motion.scale[k] * sum.scale);
-            const int u = s_.local_unknown[kind * kKeys + k];
-            auto at = std::find(index.begin(), index.end(), u);
-            if (at == index.end()) {
-              index.push_back(u);
-              value.push_back(entry);
-            } else {
-              value[static_cast<size_t>(at - index.begin())] += entry;
-            }
-          }
-        }
-        sum = MuscleSums{};
-      }
-      s_.touched_muscles.clear();
-      for (size_t a = 0; a < index.size(); ++a) {
-        out->rough_gradient[index[a]] += value[a] * residual;
-        for (size_t b = 0; b < index.size(); ++b) out->rough_normal(index[a], index[b]) += value[a] * value[b];
+      // Its entries are all among the pose's rough_unknowns (the keys that move).
+      const SparseRow row = laplacianRow(part, v, ring, n, scale);
+      for (const auto& [ua, va] : row.entries) {
+        const int a = s_.local_unknown[static_cast<size_t>(ua)];
+        out->rough_gradient[a] += va * residual;
+        for (const auto& [ub, vb] : row.entries) out->rough_normal(a, s_.local_unknown[static_cast<size_t>(ub)]) += va * vb;
       }
     }
   }
@@ -596,9 +576,7 @@ void PoseRowBuilder::addRoughnessCap(bool measure_only, PoseRows* out) {
       const bool near_above = above < band, near_below = below < band;
       if (!near_above && !near_below) continue;
       if (measure_only) continue;
-      addVertex(part, v, n, 1.0);
-      for (int u : ring) addVertex(part, u, n, -share);
-      const SparseRow row = takeSparseRow(weight);  // d(weight e) / d(amplitudes)
+      const SparseRow row = laplacianRow(part, v, ring, n, weight);  // d(weight e) / d(amplitudes)
       if (near_above) {
         SparseRow negated = row;
         for (auto& entry : negated.entries) entry.second = -entry.second;
