@@ -310,7 +310,7 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
     runCliOk("bake " + quoted(character.input) + " --muscles " + quoted(job_dir + "/muscles.json") + " --helper-joints " +
              character.bake_flags + " -o " + quoted(job_dir + "/baked.glb"));
     jobs["jobs"].push_back({{"dir", job_dir},
-                            {"runtime_library", RIGBAKE_RUNTIME_SHARED},
+                            {"runtime_library", rigbake::test::kRuntimeLibrary},
                             {"baked", job_dir + "/baked.glb"},
                             {"muscles", job_dir + "/muscles.json"},
                             {"move", {character.move, "insertion"}}});
@@ -319,7 +319,7 @@ TEST_CASE("Blender add-on: the live rig follows the C++ runtime on every clip, w
   if (!cesium.empty()) {
     std::filesystem::create_directories(dir / "operators");
     jobs["operators"] = {{"dir", dir / "operators"},
-                         {"rigbake", RIGBAKE_CLI},
+                         {"rigbake", rigbake::test::kRigbakeCli},
                          {"character", mannequin},
                          {"foreign_muscles", dir / "CesiumMan/muscles.json"}};
   }

@@ -202,7 +202,7 @@ TEST_CASE("cli bake: on a terminal the progress is one line rewritten in place, 
   auto onTerminal = [&](const std::string& args) {
     const std::string out = dir / "terminal.out";
     const std::string command = "/usr/bin/python3 -c 'import os, pty, sys; sys.exit(os.waitstatus_to_exitcode(pty.spawn(sys.argv[1:])))' " +
-                                std::string(RIGBAKE_CLI) + " " + args + " >" + out + " 2>&1 </dev/null";
+                                std::string(rigbake::test::kRigbakeCli) + " " + args + " >" + out + " 2>&1 </dev/null";
     const int status = std::system(command.c_str());
     INFO(command);
     REQUIRE(WIFEXITED(status));

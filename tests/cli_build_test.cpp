@@ -452,7 +452,7 @@ TEST_CASE("cli build: file-system problems are IO_* lines naming the path, never
     const std::string manifest = writeBuildProject(dir, "p", 4);
     nlohmann::json json = nlohmann::json::parse(slurp(manifest));
     json["characters"][0]["input"] = dir / "p/sample.glb";
-    const ext::CommandResult run = ext::runCommand("echo " + ext::shellQuote(json.dump()) + " | " + std::string(RIGBAKE_CLI) +
+    const ext::CommandResult run = ext::runCommand("echo " + ext::shellQuote(json.dump()) + " | " + std::string(rigbake::test::kRigbakeCli) +
                                                    " build /dev/fd/3 3<&0 2>&1 </dev/null");
     INFO(run.output);
     CHECK(run.exit_code == 2);

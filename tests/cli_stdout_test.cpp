@@ -127,7 +127,7 @@ TEST_CASE("cli: a standard output that cannot be written fails the run and leave
   TempDir capture;  // stderr goes here, not into /dev/full
   for (const Case& c : cases) {
     const ext::CommandResult run =
-        ext::runCommand(std::string(RIGBAKE_CLI) + " " + c.args + " >" + full + " 2>" + (capture / "err"));
+        ext::runCommand(std::string(rigbake::test::kRigbakeCli) + " " + c.args + " >" + full + " 2>" + (capture / "err"));
     const std::string err = slurp(capture / "err");
     INFO(c.args << "\n" << err);
     CHECK(run.exit_code == 2);

@@ -47,7 +47,7 @@ struct TempDir {
 inline CliResult runCli(const std::string& args, const std::string& environment = "") {
   TempDir capture;
   std::string out = capture / "out", err = capture / "err";
-  std::string command = (environment.empty() ? "" : "env " + environment + " ") + std::string(RIGBAKE_CLI) + " " + args + " >" +
+  std::string command = (environment.empty() ? "" : "env " + environment + " ") + std::string(rigbake::test::kRigbakeCli) + " " + args + " >" +
                         out + " 2>" + err + " </dev/null";
   int status = std::system(command.c_str());
   CliResult result;

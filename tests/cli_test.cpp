@@ -421,7 +421,7 @@ TEST_CASE("cli: an output that is a device, a FIFO or a directory is refused bef
   }
   // /proc/self/fd/1 when stdout is a pipe: a link whose text names nothing, to something not a file.
   const ext::CommandResult piped =
-      ext::runCommand("cd " + ext::shellQuote(dir.path.string()) + " && " + std::string(RIGBAKE_CLI) + " sample -o /proc/self/fd/1 2>&1 | cat");
+      ext::runCommand("cd " + ext::shellQuote(dir.path.string()) + " && " + std::string(rigbake::test::kRigbakeCli) + " sample -o /proc/self/fd/1 2>&1 | cat");
   INFO(piped.output);
   CHECK(piped.output.rfind("IO_OUTPUT_NOT_REGULAR /proc/self/fd/1: exists and is a FIFO", 0) == 0);
   CHECK(namesIn(dir.path.string()) == std::set<std::string>{"fifo", "folder", "null"});
@@ -485,7 +485,7 @@ TEST_CASE("cli: a device as an input is one line at once, an input past its limi
   // A preset through a pipe is still read, up to the same limit.
   const std::string preset = ext::shellQuote(sourceDir() + "/presets/muscles/gow_biped.json");
   REQUIRE(runCli("place " + sample + " --preset " + preset + " -o " + (dir / "by_path.json")).exit_code == 0);
-  const ext::CommandResult piped = ext::runCommand("cat " + preset + " | " + std::string(RIGBAKE_CLI) + " place " + sample +
+  const ext::CommandResult piped = ext::runCommand("cat " + preset + " | " + std::string(rigbake::test::kRigbakeCli) + " place " + sample +
                                                    " --preset /dev/stdin -o " + (dir / "by_pipe.json") + " 2>&1");
   INFO(piped.output);
   CHECK(piped.exit_code == 0);

@@ -260,7 +260,7 @@ TEST_CASE("cli validate: a report folder the run created is gone again when its 
   // A full disk, played by a file size limit: write() fails with EFBIG (SIGXFSZ ignored, or it kills).
   test::TempDir dir;
   const std::string reports = dir / "new/reports";
-  const ext::CommandResult run = ext::runCommand("ulimit -f 8 && trap '' XFSZ && " + std::string(RIGBAKE_CLI) + " validate " +
+  const ext::CommandResult run = ext::runCommand("ulimit -f 8 && trap '' XFSZ && " + std::string(rigbake::test::kRigbakeCli) + " validate " +
                                                  ext::shellQuote(cliBake().glb) + " --no-pictures --report " +
                                                  ext::shellQuote(reports) + " 2>&1");
   INFO(run.output);

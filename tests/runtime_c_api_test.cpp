@@ -384,8 +384,8 @@ TEST_CASE("runtime C API: a C program and Python ctypes on the shared library co
   const FrameInputs in = writeFrameInputs(bake, dir, 1);
   const std::vector<float> expected = inProcessFrames(bake, in);
   // The C99 program, and the Python script loading the library the program links (as Blender's add-on does).
-  const std::string library = RIGBAKE_RUNTIME_LIBRARY;
-  for (const std::string& program : {std::string(RIGBAKE_RUNTIME_C_CHECK),
+  const std::string library = rigbake::test::kRuntimeLibrary;
+  for (const std::string& program : {std::string(rigbake::test::kRuntimeCCheck),
                                      "/usr/bin/python3 " + std::string(RIGBAKE_SOURCE_DIR) + "/tests/runtime_ctypes_check.py " + library}) {
     INFO(program);
     const std::string out_path = dir / "out.f32";

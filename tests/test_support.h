@@ -17,6 +17,12 @@ inline std::string sharedAssetsDir() {
 
 inline std::string sourceDir() { return RIGBAKE_SOURCE_DIR; }
 
+// This build tree's programs. The cases are compiled once, in the release tree, and the sanitizer tree
+// links that same archive (tests/CMakeLists.txt): main.cpp, which each tree compiles itself, defines them.
+extern const char* const kRigbakeCli;     // the CLI the cases run
+extern const char* const kRuntimeLibrary;  // the runtime's shared library
+extern const char* const kRuntimeCCheck;   // tests/c_api/runtime_c_check, a C program on that library
+
 // The real characters the brief names. Under CI=true a missing file fails the test run.
 // RIGBAKE_TEST_ASSETS=name,name,... narrows the list for a pass that only needs each code path once
 // (scripts/test.sh's sanitizer pass); an unknown name fails, so a typo cannot empty the list.

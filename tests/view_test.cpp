@@ -490,7 +490,7 @@ TEST_CASE("rigbake view: bad input, help, atomic and deterministic output") {
   SECTION("a write that fails (a file size limit, as a full disk) names the page's file, not the temporary folder") {
     const std::string baked = bakeForView(sample, "--influences 4", dir / "baked.glb");
     // ulimit -f makes write() fail with EFBIG past 64 blocks; SIGXFSZ, ignored, would otherwise kill the run.
-    const ext::CommandResult run = ext::runCommand("ulimit -f 64 && trap '' XFSZ && " + std::string(RIGBAKE_CLI) + " view " +
+    const ext::CommandResult run = ext::runCommand("ulimit -f 64 && trap '' XFSZ && " + std::string(rigbake::test::kRigbakeCli) + " view " +
                                                    viewArg(baked) + " -o " + viewArg(dir / "page") + " --player " +
                                                    viewArg(player) + " 2>&1");
     INFO(run.output);
