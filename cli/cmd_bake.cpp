@@ -51,6 +51,33 @@ struct BakeCommandOptions {
 // The skin's surface figures are measured only when the bake writes figures (pipeline/bake.h measure_skin).
 bool skinFiguresWritten(const BakeCommandOptions& options) { return !options.stats_output.empty() || options.json; }
 
+// The clip whose rig is roughest against plain skinning, and, when the fitted rig is over
+// SKIN_ROUGHNESS_RISE's bound on some clip with no cap set, the option that trades volume for it.
+void printRoughness(const BakeCommandOptions& options, const BakeResult& bake) {
+  const ClipQuality* roughest = nullptr;
+  const double rough_allowed = checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>().threshold;
+  int rough_clips = 0, measured_clips = 0;
+  for (const ClipQuality& clip : bake.quality.clips) {
+    if (!clip.surface.measured) continue;
+    ++measured_clips;
+    rough_clips += roughnessRatio(clip.surface) > rough_allowed;
+    if (!roughest || roughnessRatio(clip.surface) > roughnessRatio(roughest->surface)) roughest = &clip;
+  }
+  if (roughest) {
+    const double* rise = roughest->surface.roughness_rise;
+    std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
+              << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
+              << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm";
+    // The fit buys volume with bulges; the cap is the other side of that trade (measured on eight
+    // characters: docs/deformation-quality.md, "The roughness cap"), so a bake over the check says so.
+    if (rough_clips > 0 && bake.fit.parameters > 0 && options.fit_roughness_cap == 0.0)
+      std::cerr << "; the rig is rougher than " << std::setprecision(2) << rough_allowed << "x plain skinning on " << rough_clips << " of "
+                << measured_clips << " clips (SKIN_ROUGHNESS_RISE): --fit-roughness-cap " << rough_allowed
+                << " bounds it in the fit and keeps less of the volume (docs/deformation-quality.md, \"The roughness cap\")";
+    std::cerr << "\n";
+  }
+}
+
 // The figures on stderr: the bake, its error and where it peaks, volumes, roughness, creases, seams,
 // legs, jiggles and VRM constraints.
 void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out) {
@@ -135,28 +162,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << " % signed, " << 100.0 * overstated->surface.occupied[3].change << " % occupied (plain skinning "
               << 100.0 * overstated->surface.occupied[0].change << " %)" << std::noshowpos << "\n";
   }
-  const ClipQuality* roughest = nullptr;
-  const double rough_allowed = checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>().threshold;
-  int rough_clips = 0, measured_clips = 0;
-  for (const ClipQuality& clip : bake.quality.clips) {
-    if (!clip.surface.measured) continue;
-    ++measured_clips;
-    rough_clips += roughnessRatio(clip.surface) > rough_allowed;
-    if (!roughest || roughnessRatio(clip.surface) > roughnessRatio(roughest->surface)) roughest = &clip;
-  }
-  if (roughest) {
-    const double* rise = roughest->surface.roughness_rise;
-    std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
-              << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
-              << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm";
-    // The fit buys volume with bulges; the cap is the other side of that trade (measured on eight
-    // characters: docs/deformation-quality.md, "The roughness cap"), so a bake over the check says so.
-    if (rough_clips > 0 && bake.fit.parameters > 0 && options.fit_roughness_cap == 0.0)
-      std::cerr << "; the rig is rougher than " << std::setprecision(2) << rough_allowed << "x plain skinning on " << rough_clips << " of "
-                << measured_clips << " clips (SKIN_ROUGHNESS_RISE): --fit-roughness-cap " << rough_allowed
-                << " bounds it in the fit and keeps less of the volume (docs/deformation-quality.md, \"The roughness cap\")";
-    std::cerr << "\n";
-  }
+  printRoughness(options, bake);
   // Strain: the clip whose rig stretches or squashes its skin most against plain skinning (as validate's
   // SKIN_STRAIN takes it).
   const ClipQuality* strained = nullptr;
