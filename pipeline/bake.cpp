@@ -9,6 +9,7 @@
 #include "core/error.h"
 #include "pipeline/surface_graph.h"
 #include "pipeline/muscle_joint.h"
+#include "pipeline/influence_refit.h"
 #include "pipeline/joint_regions.h"
 #include "pipeline/parallel.h"
 #include "pipeline/pose.h"
@@ -211,6 +212,28 @@ void fitResponses(const Character& character, const BakeOptions& options, const 
                   BakeResult* result);
 
 // Joints: bind and rest transforms of every muscle's base, tip, driver and skinned joint.
+// The kept weights refitted to the full ones' motion (pipeline/influence_refit.h). A place that several
+// parts' vertices share (a border between meshes) is fitted at its first vertex's position, so the same
+// weights there stay the same and round alike (shareSeamRoundings()).
+void refitAtPlaces(const Character& character, const std::vector<MeasuredPart>& measured, const MuscleWeights& weights,
+                   const std::vector<SkinFrame>& frames, int threads, std::vector<InfluenceSet>* pruned) {
+  std::vector<Eigen::Vector3d> place(weights.weld_of_vertex.size());
+  std::vector<char> placed(weights.weld_of_vertex.size(), 0);
+  for (size_t a = 0; a < measured.size(); ++a) {
+    const std::vector<Eigen::Vector3d>& positions = character.meshes[measured[a].mesh_part].positions;
+    std::vector<Eigen::Vector3d> at(positions.size());
+    for (size_t v = 0; v < positions.size(); ++v) {
+      const size_t w = static_cast<size_t>(weights.weld_of_vertex[static_cast<size_t>(weights.first_vertex[a]) + v]);
+      if (!placed[w]) {
+        place[w] = positions[v];
+        placed[w] = 1;
+      }
+      at[v] = place[w];
+    }
+    refitKeptWeights(measured[a].rig, at, frames, &(*pruned)[a], threads);
+  }
+}
+
 void bakeMuscleJoints(const Skeleton& skeleton, const runtime::MuscleRig<double>& rig, BakeResult* result);
 
 // Clips: every baked joint's local TRS (only written as channels when the motion is sampled), every
@@ -463,6 +486,7 @@ void roundWeights(const Character& character, const BakeOptions& options, const 
   std::vector<InfluenceSet> pruned_parts;
   std::vector<MotionPart> motion_parts;
   for (const MeasuredPart& part : *measured) pruned_parts.push_back(pruneInfluences(part.rig, options.influences, options.threads));
+  refitAtPlaces(character, *measured, weights, all_frames, options.threads, &pruned_parts);
   for (size_t a = 0; a < measured->size(); ++a)
     motion_parts.push_back(MotionPart{&pruned_parts[a], &character.meshes[(*measured)[a].mesh_part].positions});
   std::vector<QuantizedInfluences> quantized_parts = quantizeForMotion(motion_parts, all_frames, options.threads);
