@@ -454,8 +454,9 @@ TEST_CASE("cli bake: a body region that loses more than validate allows is named
 // At the default 4 influences the bake keeps each vertex's 4 strongest joints and refits their weights
 // to the full blend's motion (pipeline/influence_refit.h). Measured on CesiumMan with its ROM clips:
 // rescaling the 4 kept weights left the lower back 6.35 points beyond plain skinning in
-// rom_shoulder_flexion and the deformation error at 0.92 mm root mean square; refitted, 2.2 points and
-// 0.80 mm (docs/muscle-weights.md, "Refitting the kept weights").
+// rom_shoulder_flexion and the deformation error at 0.92 mm root mean square; refitted, the lower back
+// is 1.28 points, the worst region 2.21 (upper_arm_l in rom_spine_flexion) and the error 0.80 mm
+// (docs/muscle-weights.md, "Refitting the kept weights").
 TEST_CASE("cli bake: at 4 influences the refitted weights keep CesiumMan's regions and path closer to the full rig") {
   const std::string cesium = requireAsset("CesiumMan.glb");
   if (cesium.empty()) return;
