@@ -211,7 +211,6 @@ MuscleWeights weighMuscles(const Character& character, const MuscleSet& muscles,
 void fitResponses(const Character& character, const BakeOptions& options, const std::vector<MeasuredPart>& measured,
                   BakeResult* result);
 
-// Joints: bind and rest transforms of every muscle's base, tip, driver and skinned joint.
 // The kept weights refitted to the full ones' motion (pipeline/influence_refit.h). A place that several
 // parts' vertices share (a border between meshes) is fitted at its first vertex's position, so the same
 // weights there stay the same and round alike (shareSeamRoundings()).
@@ -234,6 +233,7 @@ void refitAtPlaces(const Character& character, const std::vector<MeasuredPart>& 
   }
 }
 
+// Joints: bind and rest transforms of every muscle's base, tip, driver and skinned joint.
 void bakeMuscleJoints(const Skeleton& skeleton, const runtime::MuscleRig<double>& rig, BakeResult* result);
 
 // Clips: every baked joint's local TRS (only written as channels when the motion is sampled), every
