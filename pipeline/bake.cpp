@@ -216,18 +216,13 @@ void fitResponses(const Character& character, const BakeOptions& options, const 
 // weights there stay the same and round alike (shareSeamRoundings()).
 void refitAtPlaces(const Character& character, const std::vector<MeasuredPart>& measured, const MuscleWeights& weights,
                    const std::vector<SkinFrame>& frames, int threads, std::vector<InfluenceSet>* pruned) {
-  std::vector<Eigen::Vector3d> place(weights.weld_of_vertex.size());
-  std::vector<char> placed(weights.weld_of_vertex.size(), 0);
+  const std::vector<std::pair<int, int>> first_at = firstVertexAtEachPlace(weights.weld_of_vertex, weights.first_vertex);
   for (size_t a = 0; a < measured.size(); ++a) {
-    const std::vector<Eigen::Vector3d>& positions = character.meshes[measured[a].mesh_part].positions;
-    std::vector<Eigen::Vector3d> at(positions.size());
-    for (size_t v = 0; v < positions.size(); ++v) {
-      const size_t w = static_cast<size_t>(weights.weld_of_vertex[static_cast<size_t>(weights.first_vertex[a]) + v]);
-      if (!placed[w]) {
-        place[w] = positions[v];
-        placed[w] = 1;
-      }
-      at[v] = place[w];
+    const size_t count = character.meshes[measured[a].mesh_part].positions.size();
+    std::vector<Eigen::Vector3d> at(count);
+    for (size_t v = 0; v < count; ++v) {
+      const auto& [part, vertex] = first_at[static_cast<size_t>(weights.weld_of_vertex[static_cast<size_t>(weights.first_vertex[a]) + v])];
+      at[v] = character.meshes[measured[static_cast<size_t>(part)].mesh_part].positions[static_cast<size_t>(vertex)];
     }
     refitKeptWeights(measured[a].rig, at, frames, &(*pruned)[a], threads);
   }

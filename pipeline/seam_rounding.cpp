@@ -6,23 +6,29 @@
 
 namespace rigbake {
 
+std::vector<std::pair<int, int>> firstVertexAtEachPlace(const std::vector<int>& weld_of_vertex, const std::vector<int>& first_vertex) {
+  std::vector<std::pair<int, int>> first_at(weld_of_vertex.size(), {-1, -1});
+  for (size_t p = 0; p + 1 < first_vertex.size(); ++p) {
+    for (int v = 0; v < first_vertex[p + 1] - first_vertex[p]; ++v) {
+      auto& first = first_at[static_cast<size_t>(weld_of_vertex[first_vertex[p] + v])];
+      if (first.first < 0) first = {static_cast<int>(p), v};
+    }
+  }
+  return first_at;
+}
+
 void shareSeamRoundings(const std::vector<int>& weld_of_vertex, const std::vector<int>& first_vertex,
                         const std::vector<InfluenceSet>& pruned, std::vector<QuantizedInfluences>* quantized) {
   assert(pruned.size() == quantized->size() && first_vertex.size() == pruned.size() + 1);
   if (pruned.size() < 2) return;  // within one part, equal weights at one place already round alike
   const int slots = pruned[0].slots_per_vertex;
-  // The first (part, vertex) at each place.
-  std::vector<std::pair<int, int>> first_at(weld_of_vertex.size(), {-1, -1});
+  const std::vector<std::pair<int, int>> first_at = firstVertexAtEachPlace(weld_of_vertex, first_vertex);
   for (size_t p = 0; p < pruned.size(); ++p) {
     assert(pruned[p].slots_per_vertex == slots && (*quantized)[p].slots_per_vertex == slots);
     const int count = first_vertex[p + 1] - first_vertex[p];
     for (int v = 0; v < count; ++v) {
-      auto& first = first_at[static_cast<size_t>(weld_of_vertex[first_vertex[p] + v])];
-      if (first.first < 0) {
-        first = {static_cast<int>(p), v};
-        continue;
-      }
-      if (first.first == static_cast<int>(p)) continue;
+      const auto& first = first_at[static_cast<size_t>(weld_of_vertex[first_vertex[p] + v])];
+      if (first.first == static_cast<int>(p)) continue;  // itself, or a vertex of its own part
       const InfluenceSet& mine = pruned[p];
       const InfluenceSet& theirs = pruned[first.first];
       bool same = true;

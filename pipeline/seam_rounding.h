@@ -5,6 +5,7 @@
 // first vertex at its place: a valid rounding of its own weights, since they are the same.
 #pragma once
 
+#include <utility>
 #include <vector>
 
 #include "pipeline/influences.h"
@@ -16,7 +17,11 @@ namespace rigbake {
 constexpr double kSameWeightTolerance = 1e-9;
 
 // `weld_of_vertex` numbers the places of every part's vertices, parts one after another (part p's
-// vertices from first_vertex[p]); pruned[p] and (*quantized)[p] are part p's rows, with the same slot
+// vertices from first_vertex[p]; first_vertex has one entry past the last part). Per place, its first
+// (part, vertex) in that order.
+std::vector<std::pair<int, int>> firstVertexAtEachPlace(const std::vector<int>& weld_of_vertex, const std::vector<int>& first_vertex);
+
+// The places as above; pruned[p] and (*quantized)[p] are part p's rows, with the same slot
 // count in every part. A vertex whose pruned row equals, within kSameWeightTolerance, that of the first
 // vertex at its place gets that vertex's quantized row.
 void shareSeamRoundings(const std::vector<int>& weld_of_vertex, const std::vector<int>& first_vertex,
