@@ -123,16 +123,24 @@ TEST_CASE("cli bake: without --stats or --json the skin's figures are skipped, s
 
 TEST_CASE("cli bake: fewer influences cost more error, in the reported figures") {
   TempDir dir;
-  double previous = 0.0;
+  double previous_max = 0.0, previous_rms = 0.0;
   for (int influences : {10, 7, 4}) {
     // The rounding's error does not depend on the response (it is measured against the same rig's
     // full-precision weights): the preset's response is kept.
     CliResult r = runCli("bake " + sampleGlbPathForCli() + " --json --response keep --influences " + std::to_string(influences) +
                          " -o " + (dir / "b.glb"));
     REQUIRE(r.exit_code == 0);
-    double max_mm = nlohmann::json::parse(r.out)["deformation_error_mm"]["max"].get<double>();
-    CHECK(max_mm > previous);
-    previous = max_mm;
+    const nlohmann::json error = nlohmann::json::parse(r.out)["deformation_error_mm"];
+    const double max_mm = error["max"].get<double>(), rms_mm = error["rms"].get<double>();
+    INFO(influences << " influences: max " << max_mm << " mm, rms " << rms_mm << " mm");
+    // With the kept joints chosen (pipeline/influence_refit.h), 7 follow the full blend on the sample
+    // to within the 0.001 rounding: the same worst vertex, 0.1505 mm at 10 and at 7 (4: 0.533 mm); the
+    // root mean square still grows, 0.005201 -> 0.005209 -> 0.00999 mm.
+    CHECK(max_mm >= previous_max);
+    CHECK(rms_mm > previous_rms);
+    if (influences == 4) CHECK(max_mm > 2.0 * previous_max);
+    previous_max = max_mm;
+    previous_rms = rms_mm;
   }
 }
 
@@ -451,13 +459,14 @@ TEST_CASE("cli bake: a body region that loses more than validate allows is named
   CHECK(checked.err.find("SKIN_REGION_VOLUME_LOSS rom_elbow_flexion/back: error") != std::string::npos);
 }
 
-// At the default 4 influences the bake keeps each vertex's 4 strongest joints and refits their weights
-// to the full blend's motion (pipeline/influence_refit.h). Measured on CesiumMan with its ROM clips:
-// rescaling the 4 kept weights left the lower back 6.35 points beyond plain skinning in
-// rom_shoulder_flexion and the deformation error at 0.92 mm root mean square; refitted, the lower back
-// is 1.28 points, the worst region 2.21 (upper_arm_l in rom_spine_flexion) and the error 0.80 mm
-// (docs/muscle-weights.md, "Refitting the kept weights").
-TEST_CASE("cli bake: at 4 influences the refitted weights keep CesiumMan's regions and path closer to the full rig") {
+// At the default 4 influences the bake chooses 4 of each vertex's joints and refits their weights to
+// the full blend's motion (pipeline/influence_refit.h). Measured on CesiumMan with its ROM clips:
+// rescaling the 4 strongest weights left the lower back 6.35 points beyond plain skinning in
+// rom_shoulder_flexion and the deformation error at 33.8 mm (0.92 mm root mean square); refitting their
+// weights, 2.21 points at worst and 28.1 mm (0.80); choosing the joints too, 1.68 points at worst
+// (abdomen in rom_shoulder_flexion) and 10.2 mm (0.27) (docs/muscle-weights.md, "Refitting the kept
+// weights").
+TEST_CASE("cli bake: at 4 influences the chosen joints keep CesiumMan's regions and path close to the full rig") {
   const std::string cesium = requireAsset("CesiumMan.glb");
   if (cesium.empty()) return;
   TempDir dir;
@@ -469,8 +478,11 @@ TEST_CASE("cli bake: at 4 influences the refitted weights keep CesiumMan's regio
   for (const auto& [region, figures] : stats["deformation_quality"]["regions"].items())
     for (const auto& [clip, f] : figures["per_clip"].items())
       worst = std::max(worst, std::min(f["input"]["change_percent"].get<double>(), 0.0) - f["rig"]["change_percent"].get<double>());
-  CHECK(worst < 2.5);
+  CHECK(worst < 2.0);
+  const size_t max_at = r.err.find("deformation error max ");
   const size_t at = r.err.find(" mm, rms ");
+  REQUIRE(max_at != std::string::npos);
   REQUIRE(at != std::string::npos);
-  CHECK(std::stod(r.err.substr(at + 9)) < 0.85);
+  CHECK(std::stod(r.err.substr(max_at + 22)) < 15.0);
+  CHECK(std::stod(r.err.substr(at + 9)) < 0.35);
 }

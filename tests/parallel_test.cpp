@@ -275,10 +275,11 @@ double pathError(const InfluenceSet& set, const InfluenceSet& full, const std::v
 
 // The kept weights refitted to the full weights' motion (pipeline/influence_refit.h), on every shared
 // asset's own clips with its weights widened to 16 slots (tests/influence_fixtures.h) and pruned to 4:
-// each row stays on its pruned joints, non-negative, summing to 1, in canonical order; no vertex follows
-// the full blend worse than the rescaled weights do (they are a point of the same simplex, so the fit's
-// optimum is at most their error); and the rows are the same at 1, 2 and 3 threads.
-TEST_CASE("refitKeptWeights: the kept weights follow the full blend at least as closely as rescaling, at any thread count") {
+// each row stays on joints of its full row, non-negative, summing to 1, in canonical order; no vertex
+// follows the full blend worse than the rescaled weights do (they are a point of the simplex the search
+// starts on, and a swap is only taken when it lowers the optimum); the rows are the same at 1, 2 and 3
+// threads; and choosing the joints, not only their weights, takes most of the error away.
+TEST_CASE("refitKeptWeights: the chosen joints and weights follow the full blend far closer than rescaling, at any thread count") {
   for (const std::string& path : test::sampleAndAssetPaths()) {
     const Character character = loadCharacter(path).character;
     const std::vector<SkinFrame> frames = ownClipFrames(character);
@@ -308,9 +309,12 @@ TEST_CASE("refitKeptWeights: the kept weights follow the full blend at least as 
           sum += w;
           row_ok = row_ok && w >= 0.0 && w <= previous;
           previous = w;
-          bool pruned_joint = w == 0.0;
-          for (int j = 0; j < 4; ++j) pruned_joint = pruned_joint || rescaled.joints[static_cast<size_t>(v) * 4 + j] == refit.joints[i];
-          row_ok = row_ok && pruned_joint;
+          bool own_joint = w == 0.0;
+          for (int j = 0; j < full.slots_per_vertex; ++j) {
+            const size_t at = static_cast<size_t>(v) * full.slots_per_vertex + j;
+            own_joint = own_joint || (full.weights[at] > 0.0 && full.joints[at] == refit.joints[i]);
+          }
+          row_ok = row_ok && own_joint;
         }
         bad_rows += !row_ok || std::abs(sum - 1.0) > 1e-9;
         const double before = pathError(rescaled, full, mesh.positions, frames, v);
@@ -327,9 +331,10 @@ TEST_CASE("refitKeptWeights: the kept weights follow the full blend at least as 
       CHECK(worse == 0);
     }
     INFO(path << ": summed squared path error, rescaled " << rescaled_total << ", refitted " << refit_total);
-    // Measured: 0.46 of the rescaled weights' error on the sample, 0.34 on CesiumMan, 0.46 on RobotExpressive,
-    // 0.63 on Quaternius Cyberpunk.
-    CHECK(refit_total < 0.75 * rescaled_total);
+    // Measured: 0.0014 of the rescaled weights' error on the sample, 0.049 on CesiumMan, 0.0092 on
+    // RobotExpressive, 0.11 on Quaternius Cyberpunk. Refitting the pruned joints alone, without choosing
+    // them, left 0.46, 0.34, 0.46 and 0.63.
+    CHECK(refit_total < 0.2 * rescaled_total);
   }
 }
 
