@@ -13,6 +13,8 @@
 
 #include "formats/gltf_document.h"
 #include "pipeline/influences.h"
+#include "pipeline/pose.h"
+#include "pipeline/quantize_for_motion.h"
 #include "test_support.h"
 
 namespace rigbake::test {
@@ -165,6 +167,21 @@ inline std::vector<Eigen::Affine3d> randomPoseSkinMatrices(const Skeleton& skele
     skin[j] = (parent >= 0 ? skin[parent] : Eigen::Affine3d::Identity()) * turn;
   }
   return skin;
+}
+
+// Skin matrices at every key time of every clip: the asset's own motion, no muscles (the frames the
+// rounding and the refit are tested against).
+inline std::vector<SkinFrame> ownClipFrames(const Character& character) {
+  std::vector<SkinFrame> frames;
+  for (const Clip& clip : character.clips) {
+    for (double time : sampleTimes(clip, 0.0)) {
+      const Pose pose = sampleClip(character.skeleton, clip, time);
+      SkinFrame skin(character.skeleton.size());
+      for (int j = 0; j < character.skeleton.size(); ++j) skin[j] = skinMatrix(pose, character.skeleton, j);
+      frames.push_back(std::move(skin));
+    }
+  }
+  return frames;
 }
 
 }  // namespace rigbake::test

@@ -26,19 +26,7 @@
 namespace rigbake {
 namespace {
 
-// Skin matrices at every key time of every clip (the assets' own motion, no muscles).
-std::vector<SkinFrame> ownClipFrames(const Character& character) {
-  std::vector<SkinFrame> frames;
-  for (const Clip& clip : character.clips) {
-    for (double time : sampleTimes(clip, 0.0)) {
-      const Pose pose = sampleClip(character.skeleton, clip, time);
-      SkinFrame skin(character.skeleton.size());
-      for (int j = 0; j < character.skeleton.size(); ++j) skin[j] = skinMatrix(pose, character.skeleton, j);
-      frames.push_back(std::move(skin));
-    }
-  }
-  return frames;
-}
+using test::ownClipFrames;
 
 bool sameQuantized(const QuantizedInfluences& a, const QuantizedInfluences& b) {
   return a.slots_per_vertex == b.slots_per_vertex && a.full_scale == b.full_scale && a.joints == b.joints &&

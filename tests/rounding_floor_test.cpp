@@ -21,6 +21,7 @@
 #include "pipeline/influences.h"
 #include "pipeline/pose.h"
 #include "pipeline/quantize_for_motion.h"
+#include "influence_fixtures.h"
 #include "test_support.h"
 
 namespace rigbake {
@@ -152,19 +153,6 @@ double bestDownOrUp(const VertexMotion& motion) {
   return best;
 }
 
-// Skin matrices at every key time of every clip.
-std::vector<SkinFrame> clipFrames(const Character& character) {
-  std::vector<SkinFrame> frames;
-  for (const Clip& clip : character.clips) {
-    for (double time : sampleTimes(clip, 0.0)) {
-      const Pose pose = sampleClip(character.skeleton, clip, time);
-      SkinFrame skin(character.skeleton.size());
-      for (int j = 0; j < character.skeleton.size(); ++j) skin[j] = skinMatrix(pose, character.skeleton, j);
-      frames.push_back(std::move(skin));
-    }
-  }
-  return frames;
-}
 
 }  // namespace
 
@@ -174,7 +162,7 @@ TEST_CASE("0.001 weights cannot keep every vertex within 0.1 mm: the floor on th
     const std::string path = test::requireAsset(name);
     if (path.empty()) continue;
     const Character character = loadCharacter(path).character;
-    const std::vector<SkinFrame> frames = clipFrames(character);
+    const std::vector<SkinFrame> frames = test::ownClipFrames(character);
     if (frames.empty()) continue;  // no motion, no error: the goal holds trivially (error 0)
     double rigbake_max = 0.0;
     bool proven = false;
