@@ -24,15 +24,23 @@ using KktVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kRefitMaxKept + 1,
 // e^T G e, G_ab = sum_t (D_a x).(D_b x), D_a = M_a - M_0 (M_0 the row's first joint; sum e = 0 makes the
 // reference free, and differences keep the sums well conditioned where every joint carries the vertex
 // far from the origin).
+//
+// Joints that move alike over the frames make G singular: a face bone or a spring bone that no clip
+// moves carries the vertex exactly as the head does. The ridge term ridge |u - w|^2 (ridge a 1e-9 share
+// of trace G) keeps every system solvable and settles such ties towards the artist's own weights, so
+// two joints the frames cannot tell apart keep the difference the file gave them (towards u = 0 it
+// would split them evenly, and the skin would follow a spring twice as much when the game moves it).
 struct VertexObjective {
   Eigen::MatrixXd gram;
+  Eigen::VectorXd w;       // the full row's weights
   Eigen::VectorXd gram_w;  // G w
   double w_gram_w = 0.0;   // w^T G w
-  double ridge = 0.0;      // joints that move alike make G singular: a trace-relative ridge keeps every system solvable
+  double ridge = 0.0;
+  double scale = 0.0;      // trace G: how far the row's joints carry the vertex apart, summed over the frames
 };
 
 // The minimum of the objective with u zero outside `kept` (indices into the full row) and sum u = 1:
-// min u^T Q u - 2 r^T u + w^T G w with Q = G_kept,kept, r = (G w)_kept. `support` (a bit mask over
+// min u^T Q u - 2 r^T u + c with Q = G_kept,kept + ridge I, r = (G w + ridge w)_kept. `support` (a bit mask over
 // `kept`) restricts u further; negative entries are allowed. Returns +inf when the system is singular.
 double equalityMinimum(const VertexObjective& objective, const int* kept, int m, unsigned support, KktVector* u) {
   int index[kRefitMaxKept];
@@ -45,13 +53,14 @@ double equalityMinimum(const VertexObjective& objective, const int* kept, int m,
     for (int c = 0; c < q; ++c) kkt(a, c) = objective.gram(kept[index[a]], kept[index[c]]);
     kkt(a, a) += objective.ridge;
     kkt(a, q) = kkt(q, a) = 1.0;
-    rhs[a] = objective.gram_w[kept[index[a]]];
+    rhs[a] = objective.gram_w[kept[index[a]]] + objective.ridge * objective.w[kept[index[a]]];
   }
   rhs[q] = 1.0;
   const KktVector solution = kkt.fullPivLu().solve(rhs);
   *u = KktVector::Zero(m);
   for (int a = 0; a < q; ++a) (*u)[index[a]] = solution[a];
-  double cost = objective.w_gram_w;
+  // (u - w)^T G (u - w) + ridge |u - w|^2, over the whole row (a dropped joint's u is 0).
+  double cost = objective.w_gram_w + objective.ridge * objective.w.squaredNorm();
   for (int a = 0; a < q; ++a) {
     const double ua = solution[a];
     cost -= 2.0 * ua * rhs[a];
@@ -98,8 +107,9 @@ double chooseKept(const VertexObjective& objective, int full_count, int m, int* 
         int trial[kRefitMaxKept];
         std::copy(kept, kept + m, trial);
         trial[a] = d;
-        // A swap must gain more than rounding: identical joints (an unanimated chain) tie exactly.
-        const double needed = round_best * (1.0 - 1e-9);
+        // A swap must gain more than rounding and the ridge can: joints the frames cannot tell apart
+        // (an unanimated chain) tie, and the ridge alone moves a cost by at most 2e-9 of the scale.
+        const double needed = round_best - 1e-7 * (round_best + objective.scale);
         KktVector trial_u;
         if (!(equalityMinimum(objective, trial, m, (1u << m) - 1u, &trial_u) < needed)) continue;
         const double cost = simplexMinimum(objective, trial, m, &trial_u);
@@ -147,7 +157,8 @@ void refitKeptWeights(const InfluenceSet& full, const std::vector<Eigen::Vector3
       for (int k = 0; k < n; ++k) positive += kept->weights[v * n + k] > 0.0;
       // Nothing dropped, one joint (its weight is 1), or more kept slots than the fit takes.
       if (full_count <= m || m < 2 || m != positive) continue;
-      Eigen::VectorXd w(full_count);
+      Eigen::VectorXd& w = objective.w;
+      w.resize(full_count);
       for (int k = 0, a = 0; k < slots; ++k)
         if (full.weights[v * slots + k] > 0.0) w[a++] = full.weights[v * slots + k];
       objective.gram = Eigen::MatrixXd::Zero(full_count, full_count);
@@ -163,7 +174,9 @@ void refitKeptWeights(const InfluenceSet& full, const std::vector<Eigen::Vector3
       objective.gram.triangularView<Eigen::StrictlyLower>() = objective.gram.transpose();
       objective.gram_w = objective.gram * w;
       objective.w_gram_w = w.dot(objective.gram_w);
-      objective.ridge = 1e-12 * objective.gram.trace();
+      objective.scale = objective.gram.trace();
+      if (!(objective.scale > 0.0)) continue;  // every joint carries the vertex alike: nothing to choose by
+      objective.ridge = 1e-9 * objective.scale;
       KktVector u;
       if (!(chooseKept(objective, full_count, m, kept_slots, &u) < std::numeric_limits<double>::infinity()))
         continue;  // no support gave a finite answer: keep the rescaled weights

@@ -326,4 +326,45 @@ TEST_CASE("refitKeptWeights: the chosen joints and weights follow the full blend
   }
 }
 
+
+// Joints the frames cannot tell apart: a face bone or a spring bone that no clip moves carries the
+// vertex exactly as its parent does, so the fit is blind between them; a game then moves one of them.
+// One vertex, 6 joints: joint 3 moves as joint 2 does in every frame, joint 5 as joint 0; pruned to 5
+// (joint 5 dropped). Joint 0 takes joint 5's share, which follows the full blend exactly, and the tie
+// between joints 2 and 3 keeps the file's difference (0.20 against 0.15). Settled towards u = 0 instead
+// (the ridge before stop 49), they split evenly, 0.175 each: the skin would follow a spring more than the
+// artist painted.
+TEST_CASE("refitKeptWeights: joints the frames cannot tell apart keep the weights the file gave them") {
+  const std::vector<double> w = {0.30, 0.20, 0.20, 0.15, 0.10, 0.05};
+  InfluenceSet full;
+  full.slots_per_vertex = 6;
+  for (int j = 0; j < 6; ++j) {
+    full.joints.push_back(j);
+    full.weights.push_back(w[static_cast<size_t>(j)]);
+  }
+  std::vector<SkinFrame> frames;
+  for (int t = 0; t < 40; ++t) {
+    const double s = 0.05 * t;
+    SkinFrame frame(6);
+    for (int j = 0; j < 6; ++j) {
+      const int moves_as = j == 3 ? 2 : j == 5 ? 0 : j;
+      const Eigen::Vector3d axis = Eigen::Vector3d(1.0 + moves_as, 0.5 * moves_as, 2.0 - moves_as).normalized();
+      frame[static_cast<size_t>(j)] = Eigen::Translation3d(0.02 * moves_as * s, 0.0, 0.01 * s) * Eigen::AngleAxisd(s * (0.3 + 0.2 * moves_as), axis);
+    }
+    frames.push_back(std::move(frame));
+  }
+  const std::vector<Eigen::Vector3d> bind = {Eigen::Vector3d(0.3, 1.0, 0.1)};
+  InfluenceSet kept = pruneInfluences(full, 5);
+  refitKeptWeights(full, bind, frames, &kept, 1);
+  std::vector<double> u(6, 0.0);
+  for (int k = 0; k < 5; ++k) u[static_cast<size_t>(kept.joints[static_cast<size_t>(k)])] += kept.weights[static_cast<size_t>(k)];
+  INFO("u = " << u[0] << " " << u[1] << " " << u[2] << " " << u[3] << " " << u[4] << " " << u[5]);
+  CHECK(u[5] == 0.0);
+  CHECK(u[0] == Approx(0.35).margin(1e-6));
+  CHECK(u[1] == Approx(0.20).margin(1e-6));
+  CHECK(u[2] == Approx(0.20).margin(1e-6));
+  CHECK(u[3] == Approx(0.15).margin(1e-6));
+  CHECK(u[4] == Approx(0.10).margin(1e-6));
+}
+
 }  // namespace rigbake
