@@ -71,21 +71,22 @@ double equalityMinimum(const VertexObjective& objective, const int* kept, int m,
   return std::isfinite(cost) ? std::max(cost, 0.0) : std::numeric_limits<double>::infinity();
 }
 
-// The convex least squares on the simplex (u >= 0, sum u = 1) over the kept joints. When the minimum
-// over the whole kept set is non-negative it is the answer (the problem is convex); otherwise every
-// smaller support's equality minimum, the best non-negative one (exact; at 4 influences at most 15
-// systems of 5 unknowns). Returns +inf when no support gives a finite answer.
-double simplexMinimum(const VertexObjective& objective, const int* kept, int m, KktVector* best_u) {
+// The convex least squares on the simplex (u >= 0, sum u = 1) over the kept joints, given the equality
+// minimum over the whole kept set (`whole`, with weights `whole_u`). When that is non-negative it is the
+// answer (the problem is convex); otherwise every smaller support's equality minimum, the best
+// non-negative one (exact; at 4 influences at most 14 more systems of at most 4 unknowns). Returns +inf
+// when no support gives a finite answer.
+double simplexMinimum(const VertexObjective& objective, const int* kept, int m, double whole, const KktVector& whole_u,
+                      KktVector* best_u) {
+  if (whole < std::numeric_limits<double>::infinity() && (whole_u.array() >= 0.0).all()) {
+    *best_u = whole_u;
+    return whole;
+  }
   const unsigned all = (1u << m) - 1u;
   KktVector u;
-  double cost = equalityMinimum(objective, kept, m, all, &u);
-  if (cost < std::numeric_limits<double>::infinity() && (u.array() >= 0.0).all()) {
-    *best_u = u;
-    return cost;
-  }
   double best = std::numeric_limits<double>::infinity();
   for (unsigned mask = 1; mask < all; ++mask) {
-    cost = equalityMinimum(objective, kept, m, mask, &u);
+    const double cost = equalityMinimum(objective, kept, m, mask, &u);
     if (!(cost < best) || !(u.array() >= 0.0).all()) continue;  // also rejects NaN
     best = cost;
     *best_u = u;
@@ -98,7 +99,9 @@ double simplexMinimum(const VertexObjective& objective, const int* kept, int m, 
 // minimum bounds the simplex minimum from below, so a swap whose bound cannot beat the round's best is
 // not solved further (the choice is the same as solving every swap). Returns the kept set's cost.
 double chooseKept(const VertexObjective& objective, int full_count, int m, int* kept, KktVector* u) {
-  double best = simplexMinimum(objective, kept, m, u);
+  const unsigned all = (1u << m) - 1u;
+  KktVector whole_u;
+  double best = simplexMinimum(objective, kept, m, equalityMinimum(objective, kept, m, all, &whole_u), whole_u, u);
   for (int round = 0; round < kSwapRounds; ++round) {
     int swap_slot = -1, swap_joint = -1;
     double round_best = best;
@@ -112,9 +115,10 @@ double chooseKept(const VertexObjective& objective, int full_count, int m, int* 
         // A swap must gain more than rounding and the ridge can: joints the frames cannot tell apart
         // (an unanimated chain) tie, and the ridge alone moves a cost by at most 2e-9 of the scale.
         const double needed = round_best - 1e-7 * (round_best + objective.scale);
-        KktVector trial_u;
-        if (!(equalityMinimum(objective, trial, m, (1u << m) - 1u, &trial_u) < needed)) continue;
-        const double cost = simplexMinimum(objective, trial, m, &trial_u);
+        KktVector whole_trial_u, trial_u;
+        const double whole = equalityMinimum(objective, trial, m, all, &whole_trial_u);
+        if (!(whole < needed)) continue;
+        const double cost = simplexMinimum(objective, trial, m, whole, whole_trial_u, &trial_u);
         if (cost < needed) {
           round_best = cost;
           round_u = trial_u;
@@ -140,12 +144,18 @@ void refitKeptWeights(const InfluenceSet& full, const std::vector<Eigen::Vector3
   const size_t stride = (frames.size() + kRefitFrames - 1) / kRefitFrames;
   parallelFor(threads, static_cast<size_t>(full.vertexCount()), 256, [&](size_t, size_t begin, size_t end) {
     std::vector<int> full_joints;
+    std::vector<double> full_weights;
     std::vector<Eigen::Vector3d> moved;
+    std::vector<std::pair<int, double>> row;
     VertexObjective objective;
     for (size_t v = begin; v < end; ++v) {
       full_joints.clear();
+      full_weights.clear();
       for (int k = 0; k < slots; ++k)
-        if (full.weights[v * slots + k] > 0.0) full_joints.push_back(full.joints[v * slots + k]);
+        if (full.weights[v * slots + k] > 0.0) {
+          full_joints.push_back(full.joints[v * slots + k]);
+          full_weights.push_back(full.weights[v * slots + k]);
+        }
       const int full_count = static_cast<int>(full_joints.size());
       int kept_slots[kRefitMaxKept];
       int m = 0;
@@ -159,10 +169,8 @@ void refitKeptWeights(const InfluenceSet& full, const std::vector<Eigen::Vector3
       for (int k = 0; k < n; ++k) positive += kept->weights[v * n + k] > 0.0;
       // Nothing dropped, one joint (its weight is 1), or more kept slots than the fit takes.
       if (full_count <= m || m < 2 || m != positive) continue;
-      Eigen::VectorXd& w = objective.w;
-      w.resize(full_count);
-      for (int k = 0, a = 0; k < slots; ++k)
-        if (full.weights[v * slots + k] > 0.0) w[a++] = full.weights[v * slots + k];
+      objective.w = Eigen::Map<const Eigen::VectorXd>(full_weights.data(), full_count);
+      const Eigen::VectorXd& w = objective.w;
       objective.gram = Eigen::MatrixXd::Zero(full_count, full_count);
       const Eigen::Vector3d& x = bind[v];
       moved.resize(static_cast<size_t>(full_count));
@@ -182,7 +190,7 @@ void refitKeptWeights(const InfluenceSet& full, const std::vector<Eigen::Vector3
       KktVector u;
       if (!(chooseKept(objective, full_count, m, kept_slots, &u) < std::numeric_limits<double>::infinity()))
         continue;  // no support gave a finite answer: keep the rescaled weights
-      std::vector<std::pair<int, double>> row;
+      row.clear();
       for (int a = 0; a < m; ++a)
         if (u[a] > 0.0) row.emplace_back(full_joints[static_cast<size_t>(kept_slots[a])], u[a]);
       std::sort(row.begin(), row.end(), [](const auto& p, const auto& q) {

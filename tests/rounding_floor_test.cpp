@@ -153,7 +153,6 @@ double bestDownOrUp(const VertexMotion& motion) {
   return best;
 }
 
-
 }  // namespace
 
 TEST_CASE("0.001 weights cannot keep every vertex within 0.1 mm: the floor on the assets' own weights") {
