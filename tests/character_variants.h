@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "anatomy/character.h"
 
@@ -33,25 +34,33 @@ inline Character withNewRoot(Character c, const Trs& root_local) {
   auto shifted = [](int joint) { return joint < 0 ? joint : joint + 1; };
   const Eigen::Affine3d root_parent = s.root_parent_world[0];
   const Eigen::Affine3d root = root_parent * root_local.matrix();
-  // An old root's local frame was its parent node's; `into_root[j]` takes it into the new root's. Rigid
-  // (root_local has no scale), so a rotation key turns by its linear part and a translation key moves as
-  // a point; scale keys are unchanged.
+  // An old root's local frame was its parent node's; `into_root[j]` takes it into the new root's. The
+  // roots of one armature can hang under different nodes (Cowboy's second root is not under the scaled
+  // armature node the first is), so `into_root[j]` may scale as well as turn and move; uniformly, as a
+  // node's world transform in these files does. So a rotation key turns by its rotation, a translation
+  // key moves as a point, and a scale key grows by its scale.
   std::vector<Eigen::Affine3d> into_root(s.size(), Eigen::Affine3d::Identity());
+  std::vector<double> root_scale(s.size(), 1.0);
+  std::vector<Eigen::Quaterniond> root_turn(s.size(), Eigen::Quaterniond::Identity());
   for (int j = 0; j < s.size(); ++j) {
     if (s.parents[j] >= 0) continue;
     into_root[j] = root.inverse() * s.root_parent_world[j];
-    const Eigen::Affine3d local = into_root[j] * s.rest_local[j].matrix();
-    s.rest_local[j].translation = local.translation();
-    s.rest_local[j].rotation = Eigen::Quaterniond(local.linear() * s.rest_local[j].scale.cwiseInverse().asDiagonal());
+    root_scale[j] = std::cbrt(into_root[j].linear().determinant());
+    root_turn[j] = Eigen::Quaterniond(into_root[j].linear() / root_scale[j]).normalized();
+    s.rest_local[j].translation = into_root[j] * s.rest_local[j].translation;
+    s.rest_local[j].rotation = root_turn[j] * s.rest_local[j].rotation;
+    s.rest_local[j].scale *= root_scale[j];
     s.root_parent_world[j] = root;
   }
   for (Clip& clip : c.clips) {
     for (Track& track : clip.tracks) {
-      if (s.parents[track.joint] >= 0 || track.path == AnimatedPath::kScale) continue;
+      if (s.parents[track.joint] >= 0) continue;
       const Eigen::Affine3d& a = into_root[track.joint];
       const bool cubic = track.interpolation == Interpolation::kCubicSpline;
-      if (track.path == AnimatedPath::kRotation) {
-        const Eigen::Quaterniond turn(a.linear());
+      if (track.path == AnimatedPath::kScale) {
+        for (double& value : track.values) value *= root_scale[track.joint];  // tangents grow alike
+      } else if (track.path == AnimatedPath::kRotation) {
+        const Eigen::Quaterniond& turn = root_turn[track.joint];
         for (size_t k = 0; k + 4 <= track.values.size(); k += 4) {
           const Eigen::Quaterniond q(track.values[k + 3], track.values[k], track.values[k + 1], track.values[k + 2]);
           // A cubic spline's tangents are derivatives of the quaternion: turned, not renormalized.
