@@ -13,11 +13,6 @@
 namespace rigbake {
 namespace {
 
-std::string directoryOf(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
-}
-
 std::string resolve(const std::string& directory, const std::string& path) {
   if (path.empty() || path[0] == '/') return path;
   return directory == "." ? path : directory + "/" + path;

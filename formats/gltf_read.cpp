@@ -19,6 +19,7 @@
 #include "formats/gltf_decompress.h"
 #include "formats/gltf_document.h"
 #include "formats/gltf_extensions.h"
+#include "formats/json_reader.h"
 #include "formats/fbx_to_gltf.h"
 #include "formats/vrm0_to_vrm1.h"
 
@@ -65,11 +66,6 @@ std::vector<std::string> requiredExtensionsOf(const std::string& bytes) {
     if (name.is_string()) required.push_back(name.get<std::string>());
   }
   return required;
-}
-
-std::string directoryOf(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? std::string(".") : path.substr(0, slash);
 }
 
 Trs nodeTrs(const tinygltf::Node& node) {

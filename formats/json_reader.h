@@ -51,5 +51,7 @@ class JsonReader {
 
 // "presets/skeletons/mixamo.json" -> "mixamo": the name a preset gets when it gives none.
 std::string fileStem(const std::string& path);
+// "models/hero.gltf" -> "models", "hero.gltf" -> ".": where a file's relative references start.
+std::string directoryOf(const std::string& path);
 
 }  // namespace rigbake
