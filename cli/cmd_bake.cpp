@@ -354,7 +354,12 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "Muscle JSON from `rigbake place` (default: place --preset on the character now)");
   command->add_option("--preset", options->preset, "Muscle preset used when --muscles is absent or positions-only")
       ->capture_default_str();
-  command->add_option("--influences", options->influences, "Influences per vertex: 4, 7 or 10")
+  command->add_option("--influences", options->influences,
+                      "Influences per vertex: 4, 7 or 10. Where a vertex has "
+                      "more, the bake keeps the joints and weights that best follow all of them over the clips' "
+                      "frames: on the eight shared characters at 4, the largest deformation error against all of "
+                      "them is 1.6-73 mm (RMS 0.02-2 mm) instead of 12-310 mm keeping the strongest "
+                      "(docs/muscle-weights.md, \"Refitting the kept weights\")")
       ->check(CLI::IsMember({4, 7, 10}))
       ->capture_default_str();
   command->add_option("--gltf-weights", options->gltf_weights,
