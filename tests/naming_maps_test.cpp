@@ -68,6 +68,61 @@ TEST_CASE("naming maps: Rigify deform bones") {
   expectJoint(r, "hand_r", "DEF-hand.R");
 }
 
+// 3ds Max's Biped, the skeleton of many studios' game characters: "Bip01 L UpperArm" as Max names it,
+// "Bip001" in later Max versions, underscores where an exporter replaced the spaces, and the Source
+// engine's "ValveBiped.Bip01_" prefix. Max names the upper arm's twist link without a space after the
+// side ("Bip01 LUpArmTwist") and the forearm's with one ("Bip01 L ForeTwist").
+TEST_CASE("naming maps: 3ds Max Biped, with spaces, Bip001, underscores and the ValveBiped prefix") {
+  struct Spelling {
+    std::string prefix, gap;
+  };
+  for (const Spelling& spelling : {Spelling{"Bip01 ", " "}, Spelling{"Bip001 ", " "}, Spelling{"Bip01_", "_"},
+                                   Spelling{"ValveBiped.Bip01_", "_"}}) {
+    INFO(spelling.prefix);
+    const std::string& p = spelling.prefix;
+    const std::string& g = spelling.gap;
+    test::Resolved r = renamed({{"JOPelvis1", p + "Pelvis"}, {"JOBack1", p + "Spine"}, {"JOBack2", p + "Spine1"},
+                                {"JOBack3", p + "Spine2"}, {"JONeck1", p + "Neck"}, {"JOHead1", p + "Head"},
+                                {"JOLeftClavicle1", p + "L" + g + "Clavicle"}, {"JOLeftUpperArm1", p + "L" + g + "UpperArm"},
+                                {"LeftUpperArm1Twist0", p + (g == " " ? "LUpArmTwist" : "L_UpArmTwist")},
+                                {"JOLeftLowerArm1", p + "L" + g + "Forearm"}, {"LeftLowerArm1Twist0", p + "L" + g + "ForeTwist"},
+                                {"JOLeftHand1", p + "L" + g + "Hand"}, {"JORightClavicle1", p + "R" + g + "Clavicle"},
+                                {"JORightUpperArm1", p + "R" + g + "UpperArm"}, {"JORightLowerArm1", p + "R" + g + "Forearm"},
+                                {"JORightHand1", p + "R" + g + "Hand"}, {"JOLeftUpLeg1", p + "L" + g + "Thigh"},
+                                {"JOLeftLeg1", p + "L" + g + "Calf"}, {"JOLeftFoot1", p + "L" + g + "Foot"},
+                                {"JOLeftToe1", p + "L" + g + "Toe0"}});
+    CHECK(r.landmarks.map_name == "max_biped");
+    expectJoint(r, "pelvis", p + "Pelvis");
+    expectJoint(r, "spine_t12", p + "Spine1");
+    expectJoint(r, "chest", p + "Spine2");
+    expectJoint(r, "clavicle_r", p + "R" + g + "Clavicle");
+    expectJoint(r, "upper_arm_twist_l", p + (g == " " ? "LUpArmTwist" : "L_UpArmTwist"));
+    expectJoint(r, "forearm_twist_l", p + "L" + g + "ForeTwist");
+    expectJoint(r, "hand_r", p + "R" + g + "Hand");
+    expectJoint(r, "lower_leg_l", p + "L" + g + "Calf");
+    expectJoint(r, "toe_l", p + "L" + g + "Toe0");
+  }
+}
+
+// A VRoid Studio avatar exported without its VRM extension keeps VRoid's joint names.
+TEST_CASE("naming maps: VRoid joint names without the VRM extension") {
+  test::Resolved r = renamed({{"JOPelvis1", "J_Bip_C_Hips"}, {"JOBack1", "J_Bip_C_Spine"}, {"JOBack2", "J_Bip_C_Chest"},
+                              {"JOBack3", "J_Bip_C_UpperChest"}, {"JONeck1", "J_Bip_C_Neck"}, {"JOHead1", "J_Bip_C_Head"},
+                              {"JOLeftClavicle1", "J_Bip_L_Shoulder"}, {"JOLeftUpperArm1", "J_Bip_L_UpperArm"},
+                              {"JOLeftLowerArm1", "J_Bip_L_LowerArm"}, {"JOLeftHand1", "J_Bip_L_Hand"},
+                              {"JORightClavicle1", "J_Bip_R_Shoulder"}, {"JORightUpperArm1", "J_Bip_R_UpperArm"},
+                              {"JORightLowerArm1", "J_Bip_R_LowerArm"}, {"JORightHand1", "J_Bip_R_Hand"},
+                              {"JOLeftUpLeg1", "J_Bip_L_UpperLeg"}, {"JOLeftLeg1", "J_Bip_L_LowerLeg"},
+                              {"JOLeftFoot1", "J_Bip_L_Foot"}, {"JOLeftToe1", "J_Bip_L_ToeBase"}});
+  CHECK(r.landmarks.map_name == "vroid");
+  expectJoint(r, "spine_l5", "J_Bip_C_Spine");
+  expectJoint(r, "spine_t12", "J_Bip_C_Chest");
+  expectJoint(r, "chest", "J_Bip_C_UpperChest");
+  expectJoint(r, "clavicle_l", "J_Bip_L_Shoulder");
+  expectJoint(r, "forearm_r", "J_Bip_R_LowerArm");
+  expectJoint(r, "toe_l", "J_Bip_L_ToeBase");
+}
+
 TEST_CASE("naming maps: a user map given with --map overrides detection") {
   test::TempDir dir;
   std::ofstream(dir / "studio.json") << R"({"name": "studio", "side_tokens": {"l": ["lf"], "r": ["rt"]},
