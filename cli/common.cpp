@@ -1,9 +1,14 @@
 #include "cli/common.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <string>
+#include <system_error>
+#include <vector>
 
 #include "core/error.h"
 #include "formats/atomic_file.h"
@@ -13,13 +18,30 @@
 
 namespace rigbake::cli {
 
+namespace {
+
+// The names of the presets of one kind shipped beside rigbake (RIGBAKE_DEFAULT_PRESET_DIR/KIND/*.json),
+// comma-separated and sorted, for --help: a naming map added as data shows up without a word of C++.
+std::string shippedPresetNames(const std::string& kind) {
+  std::vector<std::string> names;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(RIGBAKE_DEFAULT_PRESET_DIR) + "/" + kind, error))
+    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+  std::sort(names.begin(), names.end());
+  std::string joined;
+  for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+}  // namespace
+
 void addPresetOptions(CLI::App* command, PresetOptions* options) {
   command->add_option("--presets", options->presets_dir,
                       "Directory of presets (skeletons/, muscles/, landmarks.json); default: $RIGBAKE_PRESETS or the "
                       "presets/ shipped with rigbake");
   command->add_option("--map", options->map,
-                      "Skeleton naming map: a JSON file (see docs/presets.md) or a shipped map name (gow, mixamo, "
-                      "unreal, vrm_humanoid, blender, quaternius). Default: auto-detect, then structure");
+                      "Skeleton naming map: a JSON file (see docs/presets.md) or a shipped map name (" +
+                          shippedPresetNames("skeletons") + "). Default: auto-detect, then structure");
 }
 
 std::string presetsDirectory(const PresetOptions& options) {
