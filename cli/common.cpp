@@ -20,16 +20,20 @@ namespace rigbake::cli {
 
 namespace {
 
-// The names of the presets of one kind shipped beside rigbake (RIGBAKE_DEFAULT_PRESET_DIR/KIND/*.json),
-// comma-separated and sorted, for --help: a naming map added as data shows up without a word of C++.
-std::string shippedPresetNames(const std::string& kind) {
-  std::vector<std::string> names;
-  std::error_code error;
-  for (const auto& entry : std::filesystem::directory_iterator(std::string(RIGBAKE_DEFAULT_PRESET_DIR) + "/" + kind, error))
-    if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
-  std::sort(names.begin(), names.end());
-  std::string joined;
-  for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+// The names of the naming maps shipped beside rigbake (RIGBAKE_DEFAULT_PRESET_DIR/skeletons/*.json),
+// comma-separated and sorted, for --help: a map added as data shows up without a word of C++. Read once
+// per run, though seven subcommands print it.
+const std::string& shippedNamingMapNames() {
+  static const std::string joined = [] {
+    std::vector<std::string> names;
+    std::error_code error;
+    for (const auto& entry : std::filesystem::directory_iterator(std::string(RIGBAKE_DEFAULT_PRESET_DIR) + "/skeletons", error))
+      if (entry.path().extension() == ".json") names.push_back(entry.path().stem().string());
+    std::sort(names.begin(), names.end());
+    std::string list;
+    for (const std::string& name : names) list += (list.empty() ? "" : ", ") + name;
+    return list;
+  }();
   return joined;
 }
 
@@ -41,7 +45,7 @@ void addPresetOptions(CLI::App* command, PresetOptions* options) {
                       "presets/ shipped with rigbake");
   command->add_option("--map", options->map,
                       "Skeleton naming map: a JSON file (see docs/presets.md) or a shipped map name (" +
-                          shippedPresetNames("skeletons") + "). Default: auto-detect, then structure");
+                          shippedNamingMapNames() + "). Default: auto-detect, then structure");
 }
 
 std::string presetsDirectory(const PresetOptions& options) {
