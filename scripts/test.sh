@@ -45,7 +45,7 @@ GLIBC_TUNABLES="${GLIBC_TUNABLES:+$GLIBC_TUNABLES:}glibc.malloc.hugetlb=1:glibc.
 # that bake the mannequin again turned and moved, scaled to centimetres and hung under a new root check
 # that the figures do not depend on the scene's unit or placement, arithmetic the release pass checks;
 # their bakes run the figures' code that every other --stats bake here runs (32 s under the sanitizers).
-# The same holds for the Cowboy hung under one new root (two FBX bakes).
+# The same holds for the Cowboy turned and hung under one new root (three FBX bakes).
 echo "== AddressSanitizer + UBSan build, every test of rigbake's own code (at ${SECONDS} s)" >&2
 # The test binary and the CLI it runs: the benchmarks are not tests.
 bash "$repo/scripts/build.sh" asan rigbake_tests rigbake >/dev/null
