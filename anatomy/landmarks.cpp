@@ -240,6 +240,52 @@ int countMapMatches(const NamingMap& map, const Character& character) {
   return static_cast<int>(matchMap(map, character).joints.size());
 }
 
+namespace {
+
+// LandmarkSet::anatomical_parents. Each rule re-hangs at most one joint per side, in the rules' order,
+// and later rules see the earlier ones' hierarchy.
+std::vector<int> anatomicalParents(const Skeleton& skeleton, const LandmarkSet& set,
+                                   const std::vector<LimbRootRule>& rules) {
+  std::vector<int> parents = skeleton.parents;
+  // The joint a landmark was resolved to, or -1 when it is derived (it only rides a joint) or missing.
+  const auto ownJoint = [&](const std::string& name) {
+    if (!set.has(name)) return -1;
+    const Landmark& landmark = set.get(name);
+    return landmark.resolved && !landmark.from_joint.empty() ? landmark.joint : -1;
+  };
+  const auto isAncestor = [&](int ancestor, int joint) {  // strictly
+    for (int j = parents[joint]; j >= 0; j = parents[j])
+      if (j == ancestor) return true;
+    return false;
+  };
+  for (const LimbRootRule& rule : rules) {
+    const int anchor = ownJoint(rule.anchor);
+    if (anchor < 0) continue;
+    std::vector<int> trunk;  // the joints whose subtrees the limb should not hang in
+    for (const std::string& name : rule.not_under) {
+      const int joint = ownJoint(name);
+      if (joint >= 0 && isAncestor(anchor, joint)) trunk.push_back(joint);
+    }
+    const auto inTrunkSubtree = [&](int joint) {
+      for (int top : trunk)
+        if (joint == top || isAncestor(top, joint)) return true;
+      return false;
+    };
+    for (const char* side : {"l", "r"}) {
+      int root = -1;
+      for (const std::string& limb : rule.limb)
+        if (root < 0) root = ownJoint(sidedName(limb, side));
+      if (root < 0 || !isAncestor(anchor, root) || !inTrunkSubtree(root)) continue;
+      int above = parents[root];
+      while (inTrunkSubtree(above)) above = parents[above];
+      parents[root] = above;
+    }
+  }
+  return parents;
+}
+
+}  // namespace
+
 LandmarkSet resolveLandmarks(const Character& character, const LandmarkInputs& inputs) {
   assert(inputs.rules);
   const Skeleton& skeleton = character.skeleton;
@@ -319,6 +365,7 @@ LandmarkSet resolveLandmarks(const Character& character, const LandmarkInputs& i
     if (!isOptionalLandmark(baseOf(name))) required.push_back(name);
   }
   requireLandmarks(set, required, &match, map_name, file);
+  set.anatomical_parents = anatomicalParents(skeleton, set, inputs.rules->limb_roots);
   return set;
 }
 

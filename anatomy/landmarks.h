@@ -45,6 +45,10 @@ struct LandmarkSet {
   std::string map_name;  // the naming map used, or "structure"
   BodyFrame body;
   std::map<std::string, Landmark> landmarks;  // every canonical name, resolved or not
+  // Per skeleton joint, its parent as the body hangs it: the skeleton's own, except a limb root that the
+  // rig hangs from the neck or the spine (LandmarkRules::limb_roots), which hangs from the joint above
+  // those. What the muscles span is walked in this hierarchy, so that it does not depend on the rig's.
+  std::vector<int> anatomical_parents;
 
   bool has(const std::string& name) const;
   const Landmark& get(const std::string& name) const;  // asserts has()

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "anatomy/character.h"
+
 namespace rigbake {
 
 MuscleResponse defaultMuscleResponse(double compression, double stretch, const Eigen::Vector2d& bulge) {
@@ -67,6 +69,10 @@ std::string muscleResponseProblem(const MuscleResponse& response) {
   std::string problem = curveProblem(response.ratio, "ratio", 1.0);
   if (problem.empty()) problem = curveProblem(response.twist, "twist", 0.0);
   return problem;
+}
+
+const std::vector<int>& spannedHierarchy(const MuscleSet& muscles, const Skeleton& skeleton) {
+  return muscles.anatomical_parents.size() == skeleton.parents.size() ? muscles.anatomical_parents : skeleton.parents;
 }
 
 }  // namespace rigbake

@@ -10,6 +10,8 @@
 
 namespace rigbake {
 
+struct Skeleton;
+
 struct MuscleLocator {
   Eigen::Vector3d world = Eigen::Vector3d::Zero();  // bind pose, scene world space, metres
   int joint = -1;                                   // skeleton joint it rides on
@@ -89,6 +91,12 @@ struct MuscleSet {
   std::string character;  // source file name (no directories)
   double body_height = 0.0;
   std::vector<MusclePart> parts;
+  // The character's LandmarkSet::anatomical_parents, the hierarchy the muscles span; empty: the skeleton's.
+  std::vector<int> anatomical_parents;
 };
+
+// The hierarchy `muscles` span on `skeleton`: their anatomical parents when they have one per joint,
+// else the skeleton's own.
+const std::vector<int>& spannedHierarchy(const MuscleSet& muscles, const Skeleton& skeleton);
 
 }  // namespace rigbake

@@ -120,6 +120,7 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
   size_t slash = character.source.find_last_of('/');
   set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
   set.body_height = landmarks.body.height;
+  set.anatomical_parents = landmarks.anatomical_parents;
   const double scale = landmarks.body.height / preset.reference_height;
 
   std::map<std::string, Eigen::Vector3d> placed;

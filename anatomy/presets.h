@@ -34,10 +34,23 @@ struct LandmarkDerivation {
   std::string pointer;
 };
 
+// presets/landmarks.json "limb_roots": where the muscles take a limb to hang from when a rig hangs it
+// elsewhere (3ds Max's Biped can hang the clavicles from the neck and the thighs from the spine).
+// Per side, the first `limb` landmark resolved to a joint of its own: when that joint lies in the
+// subtree of a `not_under` landmark's joint (one resolved to a joint of its own, strictly below
+// `anchor`'s joint), the muscles take it as hanging from its nearest ancestor outside those subtrees.
+struct LimbRootRule {
+  std::vector<std::string> limb;       // sided base names, best first
+  std::string anchor;                  // central name
+  std::vector<std::string> not_under;  // central names
+  std::string pointer;
+};
+
 struct LandmarkRules {
   std::string file;
   double reference_height = 1.8;
   std::vector<LandmarkDerivation> derivations;  // in evaluation order
+  std::vector<LimbRootRule> limb_roots;
 };
 
 // presets/muscles/*.json: one entry per muscle part, left side; the right side is mirrored.

@@ -412,6 +412,7 @@ MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const L
   MuscleSet out;
   out.character = fileNameOf(dst.source);
   out.body_height = dst_height;
+  out.anatomical_parents = dst_landmarks.anatomical_parents;
   out.parts.reserve(source.parts.size());
   if (carried) carried->clear();
   for (size_t i = 0; i < source.parts.size(); ++i) {

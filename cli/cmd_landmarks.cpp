@@ -34,6 +34,13 @@ nlohmann::json landmarksJson(const std::string& character, const Skeleton& skele
         {"source", landmark.source},
     };
   }
+  nlohmann::json rehung = nlohmann::json::array();
+  for (int j = 0; j < skeleton.size(); ++j) {
+    const int body_parent = set.anatomical_parents[j];
+    if (body_parent == skeleton.parents[j]) continue;
+    rehung.push_back({{"joint", skeleton.names[j]}, {"rig_parent", skeleton.names[skeleton.parents[j]]},
+                      {"body_parent", skeleton.names[body_parent]}});
+  }
   return {
       {"character", character},
       {"units", "m"},
@@ -42,6 +49,7 @@ nlohmann::json landmarksJson(const std::string& character, const Skeleton& skele
        {{"height", set.body.height}, {"up", vec(set.body.up)}, {"lateral", vec(set.body.lateral)},
         {"forward", vec(set.body.forward)}}},
       {"landmarks", landmarks},
+      {"rehung", rehung},
   };
 }
 
@@ -69,6 +77,12 @@ int run(const LandmarksOptions& options) {
     std::cout << std::setw(30) << position.str();
     if (!landmark.from_joint.empty()) std::cout << "joint " << landmark.from_joint << " (" << landmark.source << ")\n";
     else std::cout << "derived " << landmark.derived << " on " << skeleton.names[landmark.joint] << "\n";
+  }
+  for (int j = 0; j < skeleton.size(); ++j) {
+    if (set.anatomical_parents[j] == skeleton.parents[j]) continue;
+    std::cout << "the muscles take " << skeleton.names[j] << " as hanging from "
+              << skeleton.names[set.anatomical_parents[j]] << ", not from the rig's " << skeleton.names[skeleton.parents[j]]
+              << " (docs/landmarks.md, \"The body's hierarchy\")\n";
   }
   return 0;
 }

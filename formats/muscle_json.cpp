@@ -141,6 +141,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
   size_t slash = character.source.find_last_of('/');
   set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
   set.body_height = landmarks.body.height;
+  set.anatomical_parents = landmarks.anatomical_parents;
 
   if (in.has("rigbake")) {
     JsonReader block = in.at("rigbake");

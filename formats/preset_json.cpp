@@ -139,7 +139,7 @@ std::vector<NamingMap> readNamingMaps(const std::string& directory) {
 LandmarkRules readLandmarkRules(const std::string& path) {
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", kPresetCode);
-  in.allowKeys({"$schema", "description", "reference_height", "derivations"});
+  in.allowKeys({"$schema", "description", "reference_height", "derivations", "limb_roots"});
   LandmarkRules rules;
   rules.file = path;
   if (in.has("reference_height")) rules.reference_height = in.at("reference_height").asNumberIn(1e-3, kMaxReferenceHeight, "m");
@@ -155,6 +155,35 @@ LandmarkRules readLandmarkRules(const std::string& path) {
     derivation.rides_on = item.at("rides_on").asString();
     requireLandmark(item.at("rides_on"), derivation.rides_on);
     rules.derivations.push_back(std::move(derivation));
+  }
+  if (in.has("limb_roots")) {
+    JsonReader limb_roots = in.at("limb_roots");
+    for (size_t i = 0; i < limb_roots.arraySize(); ++i) {
+      JsonReader item = limb_roots.at(i);
+      item.allowKeys({"limb", "anchor", "not_under", "why"});
+      LimbRootRule rule;
+      rule.pointer = item.pointer();
+      rule.limb = item.at("limb").asStringList();
+      rule.anchor = item.at("anchor").asString();
+      rule.not_under = item.at("not_under").asStringList();
+      const auto& central = centralLandmarks();
+      const auto& sided = sidedLandmarks();
+      if (rule.limb.empty()) item.at("limb").fail("needs at least one landmark");
+      for (const std::string& name : rule.limb) {
+        requireLandmark(item.at("limb"), name);
+        if (std::find(sided.begin(), sided.end(), name) == sided.end())
+          item.at("limb").fail("'" + name + "' is not a sided landmark's base name (clavicle, upper_arm, upper_leg, ...)");
+      }
+      requireLandmark(item.at("anchor"), rule.anchor);
+      if (std::find(central.begin(), central.end(), rule.anchor) == central.end())
+        item.at("anchor").fail("'" + rule.anchor + "' is not a central landmark (pelvis, chest, ...)");
+      for (const std::string& name : rule.not_under) {
+        requireLandmark(item.at("not_under"), name);
+        if (std::find(central.begin(), central.end(), name) == central.end())
+          item.at("not_under").fail("'" + name + "' is not a central landmark (spine_l5, neck, ...)");
+      }
+      rules.limb_roots.push_back(std::move(rule));
+    }
   }
   return rules;
 }

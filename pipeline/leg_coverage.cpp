@@ -21,8 +21,9 @@ LegCoverage legCoverage(const Character& character, const LandmarkSet& landmarks
   if (!coverage.legs) return coverage;
   std::vector<char> is_leg(skeleton.size(), 0);
   for (int joint : leg_joints) is_leg[joint] = 1;
+  const std::vector<int>& parents = spannedHierarchy(muscles, skeleton);
   for (const MusclePart& part : muscles.parts)
-    for (int joint : spannedJoints(skeleton, part)) coverage.covered = coverage.covered || is_leg[joint];
+    for (int joint : spannedJoints(parents, part)) coverage.covered = coverage.covered || is_leg[joint];
   const Pose rest = restPose(skeleton);
   for (const Clip& clip : character.clips) {
     for (double time : sampleTimes(clip, 0.0)) {

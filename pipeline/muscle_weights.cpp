@@ -89,11 +89,11 @@ void smooth(const SurfaceGraph& surface, const MuscleWeightOptions& options, Sha
 
 // Per welded vertex, min(1, gain * 4 x (1 - x)) with x the share of its weight on `joint` and the joints
 // below it (its first part vertex's weights: split vertices carry the same).
-std::vector<double> blendFactors(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface, int joint,
-                                 const MuscleWeightOptions& options) {
-  std::vector<char> below(skeleton.size(), 0);
-  for (int j = 0; j < skeleton.size(); ++j) {
-    for (int a = j; a >= 0 && !below[j]; a = skeleton.parents[a]) below[j] = a == joint;
+std::vector<double> blendFactors(const std::vector<int>& parents, const MeshPart& part, const SurfaceGraph& surface,
+                                 int joint, const MuscleWeightOptions& options) {
+  std::vector<char> below(parents.size(), 0);
+  for (size_t j = 0; j < parents.size(); ++j) {
+    for (int a = static_cast<int>(j); a >= 0 && !below[j]; a = parents[a]) below[j] = a == joint;
   }
   std::vector<double> blend(surface.weldedCount(), 0.0);
   const int slots = part.influences_per_vertex;
@@ -129,7 +129,7 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
     }
     // Only skin the muscle could take weight from counts: vertices weighted to a joint it spans.
     std::vector<char> spans(character.skeleton.size(), 0);
-    for (int joint : spannedJoints(character.skeleton, muscle)) spans[joint] = 1;
+    for (int joint : spannedJoints(spannedHierarchy(muscles, character.skeleton), muscle)) spans[joint] = 1;
     double nearest = std::numeric_limits<double>::infinity();
     for (const MeshPart& part : character.meshes) {
       if (!part.skinned) continue;
@@ -146,10 +146,10 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
   return radii;
 }
 
-std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part) {
+std::vector<int> spannedJoints(const std::vector<int>& parents, const MusclePart& part) {
   std::vector<int> up_from_origin, up_from_insertion;
-  for (int j = part.origin.joint; j >= 0; j = skeleton.parents[j]) up_from_origin.push_back(j);
-  for (int j = part.insertion.joint; j >= 0; j = skeleton.parents[j]) up_from_insertion.push_back(j);
+  for (int j = part.origin.joint; j >= 0; j = parents[j]) up_from_origin.push_back(j);
+  for (int j = part.insertion.joint; j >= 0; j = parents[j]) up_from_insertion.push_back(j);
   // Drop the common ancestors above the lowest common one.
   while (up_from_origin.size() >= 2 && up_from_insertion.size() >= 2 &&
          up_from_origin[up_from_origin.size() - 2] == up_from_insertion[up_from_insertion.size() - 2]) {
@@ -187,8 +187,9 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
     // that moved the whole circumference would only shift the limb, pushing its far side in. A
     // corrective drives the blended skin around its span, all of it.
     const bool corrective = muscle.kind == PartKind::kCorrective;
-    const std::vector<double> blend = corrective ? blendFactors(skeleton, part, surface, muscle.insertion.joint, options)
-                                                 : std::vector<double>();
+    const std::vector<double> blend =
+        corrective ? blendFactors(spannedHierarchy(muscles, skeleton), part, surface, muscle.insertion.joint, options)
+                   : std::vector<double>();
     const Eigen::Vector3d up = muscleRestFrame(muscle, skeleton).up;
     // Vertices outside the segment's box widened by the radius are farther than the radius from it:
     // falloff 0. (Widened a little more, so that a distance rounded down to the radius still counts.)
@@ -245,8 +246,9 @@ void chooseCarrierJoints(const Character& character, const BodySurface& body, co
   // muscle-by-muscle loop would take).
   std::vector<double> mass(muscle_count * joint_count, 0.0);
   std::vector<char> spans(muscle_count * joint_count, 0);
+  const std::vector<int>& parents = spannedHierarchy(*muscles, skeleton);
   for (size_t m = 0; m < muscle_count; ++m)
-    for (int joint : spannedJoints(skeleton, muscles->parts[m])) spans[m * joint_count + static_cast<size_t>(joint)] = 1;
+    for (int joint : spannedJoints(parents, muscles->parts[m])) spans[m * joint_count + static_cast<size_t>(joint)] = 1;
   const MeshPart& skin = body.skin(character);
   const std::vector<int>& weld = body.graph.weld_of_vertex;
   const int slots = skin.influences_per_vertex;

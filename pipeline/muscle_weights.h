@@ -43,8 +43,9 @@ double muscleWeightRadius(const MusclePart& part, double body_height);
 std::vector<double> muscleWeightRadii(const Character& character, const MuscleSet& muscles, double body_height,
                                       int threads = 1);
 
-// The joints a muscle spans: the skeleton path from its origin joint to its insertion joint.
-std::vector<int> spannedJoints(const Skeleton& skeleton, const MusclePart& part);
+// The joints a muscle spans: the path from its origin joint to its insertion joint in the hierarchy
+// `parents` (spannedHierarchy(): the body's, which need not be the rig's).
+std::vector<int> spannedJoints(const std::vector<int>& parents, const MusclePart& part);
 
 // How much of its carrier's weight each muscle may take at each welded vertex, before the influence
 // budget: peak_share * (1 - x^2)^2 * side, x = distance to the segment / radius, side the smoothstep of

@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <stdexcept>
 
 #include "anatomy/character.h"
 
@@ -97,6 +98,48 @@ inline Character withNewRoot(Character c, const Trs& root_local) {
     for (Track& track : clip.tracks) track.joint = shifted(track.joint);
   }
   for (auto& [bone, joint] : c.vrm_humanoid) joint = shifted(joint);
+  return c;
+}
+
+// `joint` moved under its sibling `new_parent`, as 3ds Max's Biped hangs the clavicles from the neck
+// where most rigs hang them from the chest. Every joint keeps its world bind pose and every clip moves
+// it as before: the sibling must carry no clip's track and no scale, so the move is one rigid change
+// of frame, applied to the joint's rest transform and its keys.
+inline Character withJointUnderSibling(Character c, int joint, int new_parent) {
+  Skeleton& s = c.skeleton;
+  bool rigid = s.parents[joint] == s.parents[new_parent] && new_parent < joint &&
+               s.rest_local[new_parent].scale.isApprox(Eigen::Vector3d::Ones());
+  for (const Clip& clip : c.clips)
+    for (const Track& track : clip.tracks) rigid = rigid && track.joint != new_parent;
+  if (!rigid) throw std::invalid_argument("withJointUnderSibling: the sibling moves, scales or comes later");
+  const Eigen::Affine3d into_sibling = s.rest_local[new_parent].matrix().inverse();
+  const Eigen::Quaterniond turn(into_sibling.linear());
+  s.rest_local[joint].translation = into_sibling * s.rest_local[joint].translation;
+  s.rest_local[joint].rotation = turn * s.rest_local[joint].rotation;
+  for (Clip& clip : c.clips) {
+    for (Track& track : clip.tracks) {
+      if (track.joint != joint || track.path == AnimatedPath::kScale) continue;
+      const bool cubic = track.interpolation == Interpolation::kCubicSpline;
+      if (track.path == AnimatedPath::kRotation) {
+        for (size_t k = 0; k + 4 <= track.values.size(); k += 4) {
+          const Eigen::Quaterniond q(track.values[k + 3], track.values[k], track.values[k + 1], track.values[k + 2]);
+          const Eigen::Quaterniond turned = turn * q;  // tangents too: turned, not renormalized
+          track.values[k] = turned.x();
+          track.values[k + 1] = turned.y();
+          track.values[k + 2] = turned.z();
+          track.values[k + 3] = turned.w();
+        }
+      } else {
+        for (size_t k = 0; k + 3 <= track.values.size(); k += 3) {
+          const Eigen::Vector3d t(track.values[k], track.values[k + 1], track.values[k + 2]);
+          const bool tangent = cubic && (k / 3) % 3 != 1;
+          const Eigen::Vector3d moved = tangent ? Eigen::Vector3d(into_sibling.linear() * t) : Eigen::Vector3d(into_sibling * t);
+          for (int i = 0; i < 3; ++i) track.values[k + i] = moved[i];
+        }
+      }
+    }
+  }
+  s.parents[joint] = new_parent;
   return c;
 }
 

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
@@ -507,6 +508,67 @@ std::string glbWithJson(const std::string& glb, const nlohmann::json& json) {
 }
 
 }  // namespace
+
+// 3ds Max's Biped with Triangle Neck on and Triangle Pelvis off hangs the clavicles from the neck and the
+// thighs from the first spine joint. `landmarks` says which joints the muscles re-hang, and from what.
+TEST_CASE("cli landmarks: a Biped-style hierarchy names the clavicles and thighs the muscles re-hang") {
+  TempDir dir;
+  nlohmann::json json = glbJson(slurp(sampleGlbPathForCli()));
+  nlohmann::json& nodes = json["nodes"];
+  const auto node = [&](const std::string& name) {
+    for (size_t n = 0; n < nodes.size(); ++n)
+      if (nodes[n]["name"] == name) return static_cast<int>(n);
+    FAIL("no node " << name);
+    return -1;
+  };
+  // Moves `child` from its parent's children to `sibling`'s, keeping its world bind pose: the sample's
+  // joints carry translations and at most a half turn about +Y (the neck), which is its own inverse.
+  const auto rehang = [&](const std::string& child, const std::string& sibling) {
+    const int c = node(child), s = node(sibling);
+    for (nlohmann::json& n : nodes) {
+      if (!n.contains("children")) continue;
+      nlohmann::json& children = n["children"];
+      children.erase(std::remove(children.begin(), children.end(), c), children.end());
+    }
+    nodes[s]["children"].push_back(c);
+    nlohmann::json& t = nodes[c]["translation"];
+    const nlohmann::json& u = nodes[s]["translation"];
+    Eigen::Vector3d local(t[0].get<double>() - u[0].get<double>(), t[1].get<double>() - u[1].get<double>(),
+                          t[2].get<double>() - u[2].get<double>());
+    if (nodes[s].contains("rotation")) {
+      REQUIRE(nodes[s]["rotation"] == nlohmann::json::array({0.0, 1.0, 0.0, 0.0}));
+      local = Eigen::Vector3d(-local.x(), local.y(), -local.z());
+      nodes[c]["rotation"] = {0.0, 1.0, 0.0, 0.0};
+    }
+    t = {local.x(), local.y(), local.z()};
+  };
+  rehang("JOLeftClavicle1", "JONeck1");
+  rehang("JORightClavicle1", "JONeck1");
+  rehang("JOLeftUpLeg1", "JOBack1");
+  rehang("JORightUpLeg1", "JOBack1");
+  std::ofstream(dir / "biped.glb", std::ios::binary) << glbWithJson(slurp(sampleGlbPathForCli()), json);
+  const CliResult run = runCli("landmarks " + (dir / "biped.glb") + " --json");
+  INFO(run.err);
+  REQUIRE(run.exit_code == 0);
+  const nlohmann::json out = nlohmann::json::parse(run.out);
+  const nlohmann::json expected = nlohmann::json::parse(R"([
+    {"joint": "JOLeftClavicle1", "rig_parent": "JONeck1", "body_parent": "JOBack3"},
+    {"joint": "JORightClavicle1", "rig_parent": "JONeck1", "body_parent": "JOBack3"},
+    {"joint": "JOLeftUpLeg1", "rig_parent": "JOBack1", "body_parent": "JOPelvis1"},
+    {"joint": "JORightUpLeg1", "rig_parent": "JOBack1", "body_parent": "JOPelvis1"}])");
+  std::set<std::string> got, want;
+  for (const nlohmann::json& entry : out["rehung"]) got.insert(entry.dump());
+  for (const nlohmann::json& entry : expected) want.insert(entry.dump());
+  CHECK(got == want);
+  // The world bind pose is the sample's: the landmarks lie where they did.
+  const nlohmann::json sample = nlohmann::json::parse(runCli("landmarks " + sampleGlbPathForCli() + " --json").out);
+  CHECK(sample["rehung"].empty());
+  for (const char* name : {"clavicle_l", "upper_leg_r", "acromion_l", "hand_r"})
+    for (int k = 0; k < 3; ++k)
+      CHECK(std::abs(out["landmarks"][name]["position"][k].get<double>() - sample["landmarks"][name]["position"][k].get<double>()) < 1e-6);
+  const CliResult text = runCli("landmarks " + (dir / "biped.glb"));
+  CHECK(text.out.find("the muscles take JOLeftClavicle1 as hanging from JOBack3, not from the rig's JONeck1") != std::string::npos);
+}
 
 TEST_CASE("cli: a skeleton whose root joint has a zero scale is GLTF_SKIN_INVALID, not NaN or an assertion") {
   // The bind transforms then have no axes: the pose code asserted (sanitizer build) or wrote NaN.

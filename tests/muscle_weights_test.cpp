@@ -88,7 +88,7 @@ TEST_CASE("muscle weights: a muscle's chosen carrier is a joint it spans, and a 
       ++kept;
       continue;
     }
-    const std::vector<int> spanned = spannedJoints(w.r.character.skeleton, part);
+    const std::vector<int> spanned = spannedJoints(spannedHierarchy(w.placed, w.r.character.skeleton), part);
     CHECK(std::find(spanned.begin(), spanned.end(), part.carrier) != spanned.end());
     ++chosen;
   }

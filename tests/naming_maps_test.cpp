@@ -172,3 +172,27 @@ TEST_CASE("naming maps: a landmark no joint matches asks for a naming map by fie
   CHECK(!std::filesystem::exists(dir / "b.glb"));
   CHECK(!std::filesystem::exists(dir / "r.json"));
 }
+
+// presets/landmarks.json "limb_roots" names a sided limb, a central anchor and central trunk landmarks;
+// a rule that mixes them up is refused with its JSON pointer, before any character is read.
+TEST_CASE("naming maps: a limb_roots rule naming the wrong kind of landmark is a preset error with its pointer") {
+  TempDir dir;
+  nlohmann::json rules = nlohmann::json::parse(slurp(test::presetsDir() + "/landmarks.json"));
+  REQUIRE(rules["limb_roots"].size() == 2);
+  const auto refusal = [&](const char* key, const nlohmann::json& value) {
+    nlohmann::json changed = rules;
+    changed["limb_roots"][1][key] = value;
+    std::ofstream(dir / "landmarks.json") << changed.dump();
+    try {
+      readLandmarkRules(dir / "landmarks.json");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  CHECK(refusal("limb", {"chest"}).find("/limb_roots/1/limb: 'chest' is not a sided landmark") != std::string::npos);
+  CHECK(refusal("anchor", "clavicle").find("/limb_roots/1/anchor: 'clavicle' is not a central landmark") != std::string::npos);
+  CHECK(refusal("not_under", {"hip"}).find("PRESET_LANDMARK_UNKNOWN") == 0);
+  CHECK(refusal("limb", nlohmann::json::array()).find("/limb_roots/1/limb: needs at least one landmark") != std::string::npos);
+  CHECK(refusal("not_under", {"spine_l5"}) == "no error");
+}

@@ -5,12 +5,15 @@
 #include <catch2/catch.hpp>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "character_variants.h"
+#include "formats/preset_json.h"
 #include "formats/rom_json.h"
+#include "pipeline/muscle_weights.h"
 #include "pipeline/rom.h"
 #include "skin_bake_fixture.h"
 
@@ -177,4 +180,41 @@ TEST_CASE("skin figures: the Cowboy, whose two armature roots hang under differe
     // centres of rotation and the rig) elsewhere: measured within 0.035 points.
     checkSameSkin(original, bake, test::resolveWithShippedPresets(test::movedBy(original.character, t)), t, 5e-4);
   }
+}
+
+// 3ds Max's Biped (presets/skeletons/max_biped.json) hangs the clavicles from the neck and the thighs
+// from the first spine joint unless its Triangle Neck and Triangle Pelvis options say otherwise, where
+// the other shipped namings hang them from the chest and the pelvis. The muscles spanning the shoulder
+// and the hip must not care: they walk the body's hierarchy (presets/landmarks.json "limb_roots").
+TEST_CASE("skin figures: the mannequin with its clavicles under the neck and its thighs under the spine, as 3ds Max's Biped hangs them, gives the same figures") {
+  const test::Resolved original = test::resolveShipped(test::sampleGlbPath());
+  const Skeleton& skeleton = original.character.skeleton;
+  CHECK(original.landmarks.anatomical_parents == skeleton.parents);
+  Character biped = original.character;
+  const std::pair<const char*, const char*> moves[] = {{"JOLeftClavicle1", "JONeck1"}, {"JORightClavicle1", "JONeck1"},
+                                                       {"JOLeftUpLeg1", "JOBack1"}, {"JORightUpLeg1", "JOBack1"}};
+  for (const auto& [limb, trunk] : moves) {
+    const int joint = skeleton.find(limb), new_parent = skeleton.find(trunk);
+    REQUIRE(skeleton.parents[joint] == skeleton.parents[new_parent]);
+    biped = test::withJointUnderSibling(std::move(biped), joint, new_parent);
+  }
+  const test::Resolved variant = test::resolveWithShippedPresets(std::move(biped));
+  for (const auto& [limb, trunk] : moves) REQUIRE(variant.character.skeleton.parents[skeleton.find(limb)] == skeleton.find(trunk));
+  // The body's hierarchy is the original's, joint for joint.
+  CHECK(variant.landmarks.anatomical_parents == skeleton.parents);
+  checkSameSkin(original, variant);
+  // gow_biped has no muscle at the hip; gow_fullbody's leg muscles span the same joints as on the original.
+  const MusclePreset fullbody = readMusclePreset(test::presetsDir() + "/muscles/gow_fullbody.json");
+  const MuscleSet a = placeMuscles(original.character, original.landmarks, fullbody, Sides::kBoth);
+  const MuscleSet b = placeMuscles(variant.character, variant.landmarks, fullbody, Sides::kBoth);
+  REQUIRE(a.parts.size() == b.parts.size());
+  int crossing_hip = 0;
+  for (size_t m = 0; m < a.parts.size(); ++m) {
+    INFO(a.parts[m].fullName());
+    const std::vector<int> spanned = spannedJoints(spannedHierarchy(a, skeleton), a.parts[m]);
+    CHECK(spannedJoints(spannedHierarchy(b, variant.character.skeleton), b.parts[m]) == spanned);
+    crossing_hip += std::count(spanned.begin(), spanned.end(), skeleton.find("JOLeftUpLeg1")) > 0 &&
+                    std::count(spanned.begin(), spanned.end(), skeleton.find("JOPelvis1")) > 0;
+  }
+  CHECK(crossing_hip >= 2);
 }
