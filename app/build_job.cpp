@@ -83,6 +83,9 @@ int validateCharacter(const CharacterOutputs& out, const BuildCharacter& charact
   request.threads = threads;  // the job's share of the cores, as its bake
   request.baked = out.model;
   request.muscles = out.muscles;
+  // The input the bake read, as it read it: validate measures the bake's own regions and plain skinning.
+  request.input.path = character.input;
+  if (character.vrm >= 0) request.input.load.vrm = character.vrm == 1 ? VrmTarget::kVrm1 : VrmTarget::kVrm0;
   request.preset = character.preset;
   request.map = character.map;
   request.rom = character.rom;

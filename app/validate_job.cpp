@@ -126,6 +126,12 @@ Report validateJob(const ValidationRequest& request, const Presets& presets) {
     BakedQualityOptions quality_options;
     quality_options.pictures = request.pictures;
     quality_options.threads = request.threads;
+    LoadedCharacter input;
+    if (!request.input.path.empty()) {
+      reportProgress(request.progress, "loading the input character");
+      input = rigbake::loadCharacter(request.input.path, request.input.load);
+      quality_options.input = &input.character;
+    }
     quality = measureBakedQuality(character, landmarks, readRegionPreset(presetFile(presets.directory, "regions", request.regions)),
                                   file, quality_options);
     inputs.quality = &quality;

@@ -19,6 +19,9 @@ inline constexpr const char* kKhronosNotRequested = "not requested";
 struct ValidationRequest {
   std::string baked;          // the baked .glb / .gltf / .vrm
   std::string muscles;        // its muscle JSON, or empty to skip the muscle checks
+  // The character the file was baked from, read as the bake read it; empty path: none, and the input
+  // skinning is the file's weights handed back to the carriers (BakedQualityOptions::input).
+  CharacterSource input;
   std::string preset = "gow_biped";  // preset for a positions-only muscle file: a name or a path
   std::string map;            // a naming map forced on the skeleton (CharacterSource::map); empty: detect
   ValidationConfig config;

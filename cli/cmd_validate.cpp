@@ -19,6 +19,7 @@ namespace {
 struct ValidateCommandOptions {
   std::string baked;
   std::string muscles;
+  std::string input;
   std::string preset = "gow_biped";
   std::string config;
   std::string report_dir;
@@ -40,6 +41,7 @@ int run(const ValidateCommandOptions& options) {
   app::ValidationRequest request;
   request.baked = options.baked;
   request.muscles = options.muscles;
+  request.input.path = options.input;
   request.preset = options.preset;
   request.map = options.presets.map;
   if (!options.config.empty()) request.config = readValidationConfig(options.config);
@@ -98,6 +100,11 @@ void addValidateCommand(CLI::App& app, Runner* runner) {
       ->required();
   command->add_option("--muscles", options->muscles,
                       "Muscle JSON the character was baked with; without it the muscle checks are skipped");
+  command->add_option("--input", options->input,
+                      "The character the file was baked from (bake's CHAR). Given, the volume, seam, surface and crease "
+                      "figures compare the rig with that file's own skinning and cut the body regions from its weights, "
+                      "as `bake --stats` does; without it, with the file's weights each muscle's handed back to its "
+                      "carrier joint, which at 4 and 7 influences are close to the input's but not its own");
   command->add_option("--preset", options->preset, "Muscle preset for a positions-only --muscles file")
       ->capture_default_str();
   command->add_option("--config", options->config,

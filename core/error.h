@@ -69,6 +69,7 @@ struct ErrorCode {
   X(IO_INPUT_NOT_REGULAR, kInvalidInput, "An input path is a device, socket or directory, not a file to read (a FIFO or pipe is read).") \
   X(INPUT_TOO_LARGE, kInvalidInput, "An input file is larger than rigbake reads of its kind (2 GiB for a glTF, GLB or VRM, 64 MiB for JSON).") \
   X(VRM_CONVERSION_UNSUPPORTED, kInvalidInput, "A bake asks for a VRM version the input cannot become: it is not a VRM, or it is a VRM 1.0 asked to be 0.x.") \
+  X(VALIDATE_INPUT_MISMATCH, kInvalidInput, "The character named as a baked file's input is not the one it was baked from: its skinned meshes, vertices or joints differ.") \
   X(INTERNAL, kInternal, "A bug in rigbake: an invariant did not hold. Please report it with the input.")
 
 namespace errc {

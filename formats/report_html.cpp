@@ -622,7 +622,9 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
   const BakedQuality& baked = report.quality;
   std::string html = "<section id=\"quality\"><h2>Deformation quality: volume and bulge</h2>\n<p class=\"explain\">"
                      "Largest volume change against the bind pose over each clip, in percent, of the input skinning "
-                     "(the file's weights with each muscle joint's weight returned to its carrier), of dual-quaternion "
+                     "(" + (baked.input_source.empty() ? std::string("the file's weights with each muscle joint's weight returned to its carrier")
+                                                      : "the weights of " + esc(baked.input_source) + ", the character it was baked from") +
+                     "), of dual-quaternion "
                      "skinning of those weights, and of the baked rig as an engine evaluates it "
                      "(docs/deformation-quality.md). Regions are closed by capping their holes. The occupied row counts each point "
                      "inside the skin once, where the signed volume counts skin pushed through opposing skin twice.</p>\n";

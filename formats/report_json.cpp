@@ -88,6 +88,10 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
   nlohmann::ordered_json quality;
   if (report.quality.measured) {
     quality = nlohmann::ordered_json(deformationQualityJson(report.quality.quality));
+    // Whose weights the input skinning is: the character file it was baked from, or null for the baked
+    // file's weights with each muscle's handed back to its carrier.
+    quality["input_weights_from"] = report.quality.input_source.empty() ? nlohmann::ordered_json(nullptr)
+                                                                        : nlohmann::ordered_json(report.quality.input_source);
     nlohmann::ordered_json pictures = nlohmann::ordered_json::array();
     for (const QualityPicture& picture : report.quality.pictures) {
       pictures.push_back({{"title", picture.title},

@@ -1,5 +1,5 @@
 // Deformation quality measured from a baked file (see the header): fold the muscles' weight back onto
-// their carriers for the input skinning, evaluate the rig as an engine does for the baked one, and hand
+// their carriers for the input skinning (or take the input file's own weights when given), evaluate the rig as an engine does for the baked one, and hand
 // both to measureDeformationQuality(); then draw each clip's worst region and each muscle kind at its
 // peak compression.
 #include "pipeline/baked_quality.h"
@@ -12,6 +12,7 @@
 #include "pipeline/surface_figures.h"
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
@@ -19,6 +20,7 @@
 #include <functional>
 #include <map>
 
+#include "core/error.h"
 #include "pipeline/influences.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
@@ -238,13 +240,59 @@ std::string fileMuscles(const Skeleton& skeleton, const BakedFileData& file, boo
   return "";
 }
 
+std::vector<int> skinnedPartsWithVertices(const Character& character) {
+  std::vector<int> parts;
+  for (size_t p = 0; p < character.meshes.size(); ++p)
+    if (character.meshes[p].skinned && !character.meshes[p].positions.empty()) parts.push_back(static_cast<int>(p));
+  return parts;
+}
+
+// Per mesh part of the baked `file`, the input's own weights on the file's joints (matched by name),
+// normalized: the plain skinning the bake measured. Empty for parts that are not skinned.
+std::vector<InfluenceSet> inputWeightsOnFile(const Character& file, const Character& input) {
+  const auto mismatch = [&](const std::string& what) {
+    const std::string baked_name = file.source.substr(file.source.find_last_of('/') + 1);  // npos + 1: all of it
+    fail(errc::VALIDATE_INPUT_MISMATCH, input.source, what + ": not the character " + baked_name + " was baked from");
+  };
+  const std::vector<int> file_parts = skinnedPartsWithVertices(file), input_parts = skinnedPartsWithVertices(input);
+  if (file_parts.size() != input_parts.size())
+    mismatch(std::to_string(input_parts.size()) + " skinned mesh parts where the baked file has " + std::to_string(file_parts.size()));
+  std::vector<int> joint_in_file(input.skeleton.size());
+  for (int j = 0; j < input.skeleton.size(); ++j) joint_in_file[j] = file.skeleton.find(input.skeleton.names[j]);
+  std::vector<InfluenceSet> out(file.meshes.size());
+  for (size_t i = 0; i < file_parts.size(); ++i) {
+    const MeshPart& baked = file.meshes[file_parts[i]];
+    const MeshPart& own = input.meshes[input_parts[i]];
+    if (own.positions.size() != baked.positions.size())
+      mismatch("mesh '" + own.name + "' has " + std::to_string(own.positions.size()) + " vertices where the baked file's '" + baked.name +
+               "' has " + std::to_string(baked.positions.size()));
+    // The bake writes the input's positions as 32-bit floats: equal to float precision of the mesh's size.
+    Eigen::AlignedBox3d box;
+    for (const Eigen::Vector3d& p : own.positions) box.extend(p);
+    const double tolerance = 1e-5 * box.diagonal().norm() + 1e-12;
+    for (size_t v = 0; v < own.positions.size(); ++v)
+      if ((own.positions[v] - baked.positions[v]).norm() > tolerance)
+        mismatch("mesh '" + own.name + "' vertex " + std::to_string(v) + " lies elsewhere than in the baked file");
+    InfluenceSet weights = influencesFromMesh(own);
+    for (size_t k = 0; k < weights.joints.size(); ++k) {
+      const int joint = joint_in_file[weights.joints[k]];
+      if (joint < 0 && weights.weights[k] != 0.0)
+        mismatch("joint '" + input.skeleton.names[weights.joints[k]] + "' skins mesh '" + own.name + "' and is not in the baked file");
+      weights.joints[k] = std::max(joint, 0);
+    }
+    out[file_parts[i]] = normalizedInfluences(weights);
+  }
+  return out;
+}
+
 // Every skinned part with positions, in order (BodyRegion::triangles is indexed the same way): the input
-// skinning's weights (each muscle's folded onto its carrier) and the rig's (relabelled by `rig_label`),
-// and the character as the input skinning sees it in *folded (regions are cut on these weights). "" or
-// why the file cannot be measured.
+// skinning's weights (the input's own when `input` is given, else each muscle's folded onto its carrier)
+// and the rig's (relabelled by `rig_label`), and the character as the input skinning sees it in *folded
+// (regions are cut on these weights). "" or why the file cannot be measured.
 std::string measuredParts(const Character& character, const std::vector<int>& fold, const std::vector<int>& rig_label,
-                          Character* folded, std::vector<MeasuredPart>* parts) {
+                          const Character* input, Character* folded, std::vector<MeasuredPart>* parts) {
   const int joint_count = character.skeleton.size();
+  const std::vector<InfluenceSet> input_weights = input ? inputWeightsOnFile(character, *input) : std::vector<InfluenceSet>();
   for (size_t p = 0; p < character.meshes.size(); ++p) {
     const MeshPart& mesh = character.meshes[p];
     if (!mesh.skinned || mesh.positions.empty()) continue;
@@ -252,7 +300,7 @@ std::string measuredParts(const Character& character, const std::vector<int>& fo
     if (!checkInfluences(file_weights, joint_count).empty()) return "mesh '" + mesh.name + "' has invalid skin weights (WEIGHTS_* checks)";
     MeasuredPart part;
     part.mesh_part = static_cast<int>(p);
-    part.input = normalizedInfluences(foldInfluences(file_weights, fold));
+    part.input = input ? input_weights[p] : normalizedInfluences(foldInfluences(file_weights, fold));
     part.rig = normalizedInfluences(foldInfluences(file_weights, rig_label));
     folded->meshes[p].joints = part.input.joints;
     folded->meshes[p].weights = part.input.weights;
@@ -498,8 +546,9 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
 
   Character folded = character;
   std::vector<MeasuredPart> parts;
-  out.skip_reason = measuredParts(character, fold, rig_label, &folded, &parts);
+  out.skip_reason = measuredParts(character, fold, rig_label, options.input, &folded, &parts);
   if (!out.skip_reason.empty()) return out;
+  if (options.input) out.input_source = options.input->source.substr(options.input->source.find_last_of('/') + 1);
   const std::vector<BodyRegion> regions = resolveBodyRegions(folded, landmarks, preset);
 
   MuscleSet muscle_set;

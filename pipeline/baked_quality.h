@@ -22,6 +22,12 @@ struct BakedQualityOptions {
   int picture_size = 200;  // pixels, each of the three panels (square)
   bool pictures = true;
   int threads = 1;  // frames measured on this many threads (0: one per core); the same figures at any count
+  // The character the file was baked from, or nullptr. Given, the input skinning is its own weights
+  // (its skinned mesh parts in order, joints matched by name), so the regions and plain skinning are
+  // the bake's; else the file's weights with each muscle's handed back to its carrier, which at 4 and
+  // 7 influences are close to the input's but not its own. VALIDATE_INPUT_MISMATCH when the parts,
+  // vertices or joints are not the file's.
+  const Character* input = nullptr;
 };
 
 // Needs the file's muscle nodes (skinned ones with a carrier joint) and the landmarks; without them

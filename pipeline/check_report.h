@@ -149,6 +149,9 @@ struct QualityPicture {
 struct BakedQuality {
   bool measured = false;
   std::string skip_reason;  // when not measured
+  // The file (name, no directories) whose own weights are the input skinning; empty: the baked file's
+  // weights with each muscle's handed back to its carrier.
+  std::string input_source;
   DeformationQuality quality;
   std::vector<QualityPicture> pictures;
 };

@@ -269,3 +269,22 @@ TEST_CASE("cli validate: a report folder the run created is gone again when its 
   CHECK(run.output.find("File too large") != std::string::npos);
   CHECK_FALSE(std::filesystem::exists(dir / "new"));
 }
+
+TEST_CASE("cli validate: --input naming another character than the one baked is VALIDATE_INPUT_MISMATCH, no report") {
+  const std::string other = test::requireAsset("CesiumMan.glb");
+  if (other.empty()) return;
+  const std::string reports = test::validateScratchDir() + "/mismatch";
+  const test::CliResult run = runCli("validate " + ext::shellQuote(cliBake().glb) + " --input " + ext::shellQuote(other) +
+                                     " --no-pictures --report " + ext::shellQuote(reports));
+  CHECK(run.exit_code == 3);
+  CHECK(run.err.rfind("VALIDATE_INPUT_MISMATCH " + other + ": ", 0) == 0);
+  CHECK(run.err.find("not the character baked.glb was baked from") != std::string::npos);
+  CHECK(test::lineCount(run.err) == 1);
+  CHECK(!std::filesystem::exists(reports + "/report.json"));
+  // The sample it was baked from is accepted.
+  const test::CliResult own = runCli("validate " + ext::shellQuote(cliBake().glb) + " --input " +
+                                     ext::shellQuote(test::sampleGlbPathForCli()) + " --no-pictures --report " + ext::shellQuote(reports));
+  INFO(own.err);
+  CHECK(own.exit_code == 0);
+}
+

@@ -328,12 +328,16 @@ TEST_CASE("FBX cli build: a manifest of the three FBX characters, a GLB and a VR
   const nlohmann::json summary = nlohmann::json::parse(test::slurp(dir / "out/summary.json"));
   CHECK(summary["counts"]["built"] == 5);
   const std::map<std::string, int> clips = {{"male", 11}, {"female", 11}, {"cowboy", 20}, {"sample", 3}, {"avatar", 3}};
+  // build hands validate the file each character was baked from: the regions and plain skinning are the bake's.
+  const std::map<std::string, std::string> inputs = {{"male", "Male_Casual.fbx"}, {"female", "Female_Casual.fbx"},
+                                                     {"cowboy", "Cowboy.fbx"}, {"sample", "sample.glb"}, {"avatar", "sample.vrm"}};
   const bool validator = ext::requireTool(ext::validatorAvailable(), ext::validatorHint());
   for (const auto& [name, count] : clips) {
     INFO(name);
     const nlohmann::json report = nlohmann::json::parse(test::slurp(dir / ("out/" + name + "/report.json")));
     const nlohmann::json& per_clip = report["deformation_quality"]["body"]["per_clip"];
     CHECK(static_cast<int>(per_clip.size()) == count);
+    CHECK(report["deformation_quality"]["input_weights_from"] == inputs.at(name));
     for (const auto& [clip, figures] : per_clip.items()) {
       INFO(clip);
       CHECK(figures["input"]["change_percent"].is_number());

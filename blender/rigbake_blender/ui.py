@@ -86,6 +86,10 @@ class RIGBAKE_OT_validate(bpy.types.Operator):
         scene = context.scene
         arguments = ["validate", bpy.path.abspath(scene.rigbake_baked), "--no-pictures",
                      "--report", os.path.join(bpy.app.tempdir, "rigbake-report")]
+        # The character Bake and reload baked: validate then measures the bake's own regions and plain
+        # skinning, not the weights handed back to the muscles' carriers (docs/validate.md).
+        if scene.rigbake_character:
+            arguments += ["--input", bpy.path.abspath(scene.rigbake_character)]
         ok, message = cli.run(context, arguments)
         self.report({'INFO'} if ok else {'ERROR'}, message)
         return {'FINISHED'} if ok else {'CANCELLED'}
