@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <numeric>
 #include <stdexcept>
 
 #include "anatomy/character.h"
@@ -140,6 +141,39 @@ inline Character withJointUnderSibling(Character c, int joint, int new_parent) {
     }
   }
   s.parents[joint] = new_parent;
+  return c;
+}
+
+// Every skinned mesh part's vertices in another order, as another exporter may write them: vertex v
+// of the original is vertex order[v] of the variant, with order[v] = (v * stride + 1) mod n for a
+// stride coprime with n (a shuffle, not a reversal a loop could undo), and the triangles listed in
+// reverse order, each starting at its second corner (same winding). `order` gets each part's map.
+inline Character withVerticesReordered(Character c, std::vector<std::vector<int>>* order) {
+  order->assign(c.meshes.size(), {});
+  for (size_t p = 0; p < c.meshes.size(); ++p) {
+    MeshPart& part = c.meshes[p];
+    const int n = static_cast<int>(part.positions.size());
+    if (!part.skinned || n == 0) continue;
+    int stride = 7919;
+    while (std::gcd(stride, n) != 1) stride += 2;
+    std::vector<int>& to = (*order)[p];
+    to.resize(n);
+    for (int v = 0; v < n; ++v) to[v] = static_cast<int>((static_cast<long long>(v) * stride + 1) % n);
+    const MeshPart original = part;
+    const int slots = part.influences_per_vertex;
+    for (int v = 0; v < n; ++v) {
+      part.positions[to[v]] = original.positions[v];
+      for (int k = 0; k < slots; ++k) {
+        part.joints[static_cast<size_t>(to[v]) * slots + k] = original.joints[static_cast<size_t>(v) * slots + k];
+        part.weights[static_cast<size_t>(to[v]) * slots + k] = original.weights[static_cast<size_t>(v) * slots + k];
+      }
+    }
+    const size_t t = part.triangles.size();
+    for (size_t i = 0; i < t; ++i) {
+      const std::array<int, 3>& tri = original.triangles[t - 1 - i];
+      part.triangles[i] = {to[tri[1]], to[tri[2]], to[tri[0]]};
+    }
+  }
   return c;
 }
 
