@@ -26,6 +26,31 @@ inline Character movedBy(Character c, const Eigen::Affine3d& motion) {
   return c;
 }
 
+// A rotation or translation track's keys carried into a new parent frame `a` (turning by `turn`, a's
+// rotation without its scale): a rotation key turns, a translation key moves as a point. A cubic
+// spline's tangents are derivatives: a quaternion's turned, not renormalized; a translation's turned,
+// not moved.
+inline void changeTrackFrame(const Eigen::Affine3d& a, const Eigen::Quaterniond& turn, Track* track) {
+  std::vector<double>& values = track->values;
+  if (track->path == AnimatedPath::kRotation) {
+    for (size_t k = 0; k + 4 <= values.size(); k += 4) {
+      const Eigen::Quaterniond turned = turn * Eigen::Quaterniond(values[k + 3], values[k], values[k + 1], values[k + 2]);
+      values[k] = turned.x();
+      values[k + 1] = turned.y();
+      values[k + 2] = turned.z();
+      values[k + 3] = turned.w();
+    }
+    return;
+  }
+  const bool cubic = track->interpolation == Interpolation::kCubicSpline;
+  for (size_t k = 0; k + 3 <= values.size(); k += 3) {
+    const Eigen::Vector3d t(values[k], values[k + 1], values[k + 2]);
+    const bool tangent = cubic && (k / 3) % 3 != 1;
+    const Eigen::Vector3d moved = tangent ? Eigen::Vector3d(a.linear() * t) : Eigen::Vector3d(a * t);
+    for (int i = 0; i < 3; ++i) values[k + i] = moved[i];
+  }
+}
+
 // A new armature root joint named `root`, with local transform `root_local` in the first root's parent
 // frame (a rotation and a translation: Blender's armature object turned a quarter about X, or a root
 // bone at the feet), under which the old roots hang. Every joint keeps its world bind pose; the old
@@ -57,29 +82,10 @@ inline Character withNewRoot(Character c, const Trs& root_local) {
   for (Clip& clip : c.clips) {
     for (Track& track : clip.tracks) {
       if (s.parents[track.joint] >= 0) continue;
-      const Eigen::Affine3d& a = into_root[track.joint];
-      const bool cubic = track.interpolation == Interpolation::kCubicSpline;
       if (track.path == AnimatedPath::kScale) {
         for (double& value : track.values) value *= root_scale[track.joint];  // tangents grow alike
-      } else if (track.path == AnimatedPath::kRotation) {
-        const Eigen::Quaterniond& turn = root_turn[track.joint];
-        for (size_t k = 0; k + 4 <= track.values.size(); k += 4) {
-          const Eigen::Quaterniond q(track.values[k + 3], track.values[k], track.values[k + 1], track.values[k + 2]);
-          // A cubic spline's tangents are derivatives of the quaternion: turned, not renormalized.
-          const Eigen::Quaterniond turned = turn * q;
-          track.values[k] = turned.x();
-          track.values[k + 1] = turned.y();
-          track.values[k + 2] = turned.z();
-          track.values[k + 3] = turned.w();
-        }
       } else {
-        for (size_t k = 0; k + 3 <= track.values.size(); k += 3) {
-          const Eigen::Vector3d t(track.values[k], track.values[k + 1], track.values[k + 2]);
-          // A cubic spline's tangents are directions: turned, not moved.
-          const bool tangent = cubic && (k / 3) % 3 != 1;
-          const Eigen::Vector3d moved = tangent ? Eigen::Vector3d(a.linear() * t) : Eigen::Vector3d(a * t);
-          for (int i = 0; i < 3; ++i) track.values[k + i] = moved[i];
-        }
+        changeTrackFrame(into_root[track.joint], root_turn[track.joint], &track);
       }
     }
   }
@@ -117,29 +123,9 @@ inline Character withJointUnderSibling(Character c, int joint, int new_parent) {
   const Eigen::Quaterniond turn(into_sibling.linear());
   s.rest_local[joint].translation = into_sibling * s.rest_local[joint].translation;
   s.rest_local[joint].rotation = turn * s.rest_local[joint].rotation;
-  for (Clip& clip : c.clips) {
-    for (Track& track : clip.tracks) {
-      if (track.joint != joint || track.path == AnimatedPath::kScale) continue;
-      const bool cubic = track.interpolation == Interpolation::kCubicSpline;
-      if (track.path == AnimatedPath::kRotation) {
-        for (size_t k = 0; k + 4 <= track.values.size(); k += 4) {
-          const Eigen::Quaterniond q(track.values[k + 3], track.values[k], track.values[k + 1], track.values[k + 2]);
-          const Eigen::Quaterniond turned = turn * q;  // tangents too: turned, not renormalized
-          track.values[k] = turned.x();
-          track.values[k + 1] = turned.y();
-          track.values[k + 2] = turned.z();
-          track.values[k + 3] = turned.w();
-        }
-      } else {
-        for (size_t k = 0; k + 3 <= track.values.size(); k += 3) {
-          const Eigen::Vector3d t(track.values[k], track.values[k + 1], track.values[k + 2]);
-          const bool tangent = cubic && (k / 3) % 3 != 1;
-          const Eigen::Vector3d moved = tangent ? Eigen::Vector3d(into_sibling.linear() * t) : Eigen::Vector3d(into_sibling * t);
-          for (int i = 0; i < 3; ++i) track.values[k + i] = moved[i];
-        }
-      }
-    }
-  }
+  for (Clip& clip : c.clips)
+    for (Track& track : clip.tracks)
+      if (track.joint == joint && track.path != AnimatedPath::kScale) changeTrackFrame(into_sibling, turn, &track);
   s.parents[joint] = new_parent;
   return c;
 }
