@@ -1,4 +1,5 @@
 #include "anatomy/placement.h"
+#include "core/file_name.h"
 
 #include <algorithm>
 #include <cctype>
@@ -117,8 +118,7 @@ MuscleSet placeMuscles(const Character& character, const LandmarkSet& landmarks,
                        Sides sides) {
   const Skeleton& skeleton = character.skeleton;
   MuscleSet set;
-  size_t slash = character.source.find_last_of('/');
-  set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
+  set.character = fileNameOf(character.source);
   set.body_height = landmarks.body.height;
   set.anatomical_parents = landmarks.anatomical_parents;
   const double scale = landmarks.body.height / preset.reference_height;

@@ -9,6 +9,7 @@
 // across it by body height (so thickness scales with the body, not with one bone's length).
 // docs/retarget.md gives the frames and the measured accuracy.
 #include "anatomy/retarget.h"
+#include "core/file_name.h"
 
 #include <algorithm>
 #include <array>
@@ -358,10 +359,6 @@ bool carryThroughFrames(const MusclePart& part, const std::array<Anchor, 3>& anc
   return between_ends;
 }
 
-std::string fileNameOf(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 }  // namespace
 

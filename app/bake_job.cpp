@@ -1,4 +1,5 @@
 #include "app/bake_job.h"
+#include "core/file_name.h"
 
 #include <chrono>
 
@@ -30,10 +31,6 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-std::string fileNameOf(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 // Placed on the character, read as the file gives them, or read against their own character and
 // retargeted onto this one.

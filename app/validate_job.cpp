@@ -1,4 +1,5 @@
 #include "app/validate_job.h"
+#include "core/file_name.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -112,8 +113,7 @@ Report validateJob(const ValidationRequest& request, const Presets& presets) {
   const BakedFileData file = readBakedFileData(loaded);
 
   ValidationInputs inputs;
-  const size_t slash = request.baked.find_last_of('/');
-  inputs.character_name = slash == std::string::npos ? request.baked : request.baked.substr(slash + 1);
+  inputs.character_name = fileNameOf(request.baked);
   inputs.character = &character;
   inputs.landmarks = landmarks_resolved ? &landmarks : nullptr;
   inputs.landmark_problem = landmark_problem;

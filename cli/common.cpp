@@ -109,9 +109,5 @@ void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_o
   }
 }
 
-std::string fileNameOf(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
-}
 
 }  // namespace rigbake::cli

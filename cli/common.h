@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/file_name.h"  // fileNameOf(): outputs name inputs without directories
 #include "anatomy/landmarks.h"
 #include "core/error.h"
 #include "app/character.h"
@@ -82,8 +83,5 @@ auto withFlagNames(const std::vector<FlagName>& flags, Call&& call) -> decltype(
   }
 }
 
-// "a/b/hero.glb" -> "hero.glb": outputs name inputs without directories so they do not depend on
-// where the tool ran.
-std::string fileNameOf(const std::string& path);
 
 }  // namespace rigbake::cli

@@ -1,4 +1,5 @@
 #include "formats/json_reader.h"
+#include "core/file_name.h"
 
 #include <algorithm>
 #include <cmath>
@@ -126,8 +127,7 @@ std::vector<std::string> JsonReader::asStringList() const {
 }
 
 std::string fileStem(const std::string& path) {
-  size_t slash = path.find_last_of('/');
-  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  const std::string name = fileNameOf(path);
   size_t dot = name.rfind('.');
   return dot == std::string::npos ? name : name.substr(0, dot);
 }

@@ -1,4 +1,5 @@
 #include "formats/muscle_json.h"
+#include "core/file_name.h"
 
 #include <algorithm>
 #include <iomanip>
@@ -138,8 +139,7 @@ MuscleSet readMuscleJson(const std::string& path, const Character& character, co
   in.requireObject();
   const Skeleton& skeleton = character.skeleton;
   MuscleSet set;
-  size_t slash = character.source.find_last_of('/');
-  set.character = slash == std::string::npos ? character.source : character.source.substr(slash + 1);
+  set.character = fileNameOf(character.source);
   set.body_height = landmarks.body.height;
   set.anatomical_parents = landmarks.anatomical_parents;
 

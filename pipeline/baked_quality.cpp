@@ -1,8 +1,9 @@
 // Deformation quality measured from a baked file (see the header): fold the muscles' weight back onto
-// their carriers for the input skinning (or take the input file's own weights when given), evaluate the rig as an engine does for the baked one, and hand
-// both to measureDeformationQuality(); then draw each clip's worst region and each muscle kind at its
-// peak compression.
+// their carriers for the input skinning (or take the input file's own weights when given), evaluate
+// the rig as an engine does for the baked one, and hand both to measureDeformationQuality(); then draw
+// each clip's worst region and each muscle kind at its peak compression.
 #include "pipeline/baked_quality.h"
+#include "core/file_name.h"
 
 #include "pipeline/joint_regions.h"
 
@@ -251,8 +252,7 @@ std::vector<int> skinnedPartsWithVertices(const Character& character) {
 // normalized: the plain skinning the bake measured. Empty for parts that are not skinned.
 std::vector<InfluenceSet> inputWeightsOnFile(const Character& file, const Character& input) {
   const auto mismatch = [&](const std::string& what) {
-    const std::string baked_name = file.source.substr(file.source.find_last_of('/') + 1);  // npos + 1: all of it
-    fail(errc::VALIDATE_INPUT_MISMATCH, input.source, what + ": not the character " + baked_name + " was baked from");
+    fail(errc::VALIDATE_INPUT_MISMATCH, input.source, what + ": not the character " + fileNameOf(file.source) + " was baked from");
   };
   const std::vector<int> file_parts = skinnedPartsWithVertices(file), input_parts = skinnedPartsWithVertices(input);
   if (file_parts.size() != input_parts.size())
@@ -548,7 +548,7 @@ BakedQuality measureBakedQuality(const Character& character, const LandmarkSet& 
   std::vector<MeasuredPart> parts;
   out.skip_reason = measuredParts(character, fold, rig_label, options.input, &folded, &parts);
   if (!out.skip_reason.empty()) return out;
-  if (options.input) out.input_source = options.input->source.substr(options.input->source.find_last_of('/') + 1);
+  if (options.input) out.input_source = fileNameOf(options.input->source);
   const std::vector<BodyRegion> regions = resolveBodyRegions(folded, landmarks, preset);
 
   MuscleSet muscle_set;
