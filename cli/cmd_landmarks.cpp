@@ -19,6 +19,14 @@ struct LandmarksOptions {
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
 
+// The joints the muscles take as hanging from another joint than the rig's (LandmarkSet::anatomical_parents).
+std::vector<int> rehungJoints(const Skeleton& skeleton, const LandmarkSet& set) {
+  std::vector<int> joints;
+  for (int j = 0; j < skeleton.size(); ++j)
+    if (set.anatomical_parents[j] != skeleton.parents[j]) joints.push_back(j);
+  return joints;
+}
+
 nlohmann::json landmarksJson(const std::string& character, const Skeleton& skeleton, const LandmarkSet& set) {
   nlohmann::json landmarks = nlohmann::json::object();
   for (const auto& [name, landmark] : set.landmarks) {
@@ -35,12 +43,9 @@ nlohmann::json landmarksJson(const std::string& character, const Skeleton& skele
     };
   }
   nlohmann::json rehung = nlohmann::json::array();
-  for (int j = 0; j < skeleton.size(); ++j) {
-    const int body_parent = set.anatomical_parents[j];
-    if (body_parent == skeleton.parents[j]) continue;
+  for (int j : rehungJoints(skeleton, set))
     rehung.push_back({{"joint", skeleton.names[j]}, {"rig_parent", skeleton.names[skeleton.parents[j]]},
-                      {"body_parent", skeleton.names[body_parent]}});
-  }
+                      {"body_parent", skeleton.names[set.anatomical_parents[j]]}});
   return {
       {"character", character},
       {"units", "m"},
@@ -78,8 +83,7 @@ int run(const LandmarksOptions& options) {
     if (!landmark.from_joint.empty()) std::cout << "joint " << landmark.from_joint << " (" << landmark.source << ")\n";
     else std::cout << "derived " << landmark.derived << " on " << skeleton.names[landmark.joint] << "\n";
   }
-  for (int j = 0; j < skeleton.size(); ++j) {
-    if (set.anatomical_parents[j] == skeleton.parents[j]) continue;
+  for (int j : rehungJoints(skeleton, set)) {
     std::cout << "the muscles take " << skeleton.names[j] << " as hanging from "
               << skeleton.names[set.anatomical_parents[j]] << ", not from the rig's " << skeleton.names[skeleton.parents[j]]
               << " (docs/landmarks.md, \"The body's hierarchy\")\n";

@@ -166,22 +166,18 @@ LandmarkRules readLandmarkRules(const std::string& path) {
       rule.limb = item.at("limb").asStringList();
       rule.anchor = item.at("anchor").asString();
       rule.not_under = item.at("not_under").asStringList();
-      const auto& central = centralLandmarks();
-      const auto& sided = sidedLandmarks();
+      // Each name canonical (PRESET_LANDMARK_UNKNOWN otherwise) and of the kind its key takes.
+      const auto requireKind = [&](const char* key, const std::vector<std::string>& names, const std::vector<std::string>& kind,
+                                   const std::string& what) {
+        for (const std::string& name : names) {
+          requireLandmark(item.at(key), name);
+          if (std::find(kind.begin(), kind.end(), name) == kind.end()) item.at(key).fail("'" + name + "' is not " + what);
+        }
+      };
       if (rule.limb.empty()) item.at("limb").fail("needs at least one landmark");
-      for (const std::string& name : rule.limb) {
-        requireLandmark(item.at("limb"), name);
-        if (std::find(sided.begin(), sided.end(), name) == sided.end())
-          item.at("limb").fail("'" + name + "' is not a sided landmark's base name (clavicle, upper_arm, upper_leg, ...)");
-      }
-      requireLandmark(item.at("anchor"), rule.anchor);
-      if (std::find(central.begin(), central.end(), rule.anchor) == central.end())
-        item.at("anchor").fail("'" + rule.anchor + "' is not a central landmark (pelvis, chest, ...)");
-      for (const std::string& name : rule.not_under) {
-        requireLandmark(item.at("not_under"), name);
-        if (std::find(central.begin(), central.end(), name) == central.end())
-          item.at("not_under").fail("'" + name + "' is not a central landmark (spine_l5, neck, ...)");
-      }
+      requireKind("limb", rule.limb, sidedLandmarks(), "a sided landmark's base name (clavicle, upper_arm, upper_leg, ...)");
+      requireKind("anchor", {rule.anchor}, centralLandmarks(), "a central landmark (pelvis, chest, ...)");
+      requireKind("not_under", rule.not_under, centralLandmarks(), "a central landmark (spine_l5, neck, ...)");
       rules.limb_roots.push_back(std::move(rule));
     }
   }
