@@ -59,6 +59,8 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     surface_clips[clip.clip] = {{"roughness_rise_p95_mm",
                                  {{"input", 1000.0 * rise[0]}, {"dual_quaternion", 1000.0 * rise[1]},
                                   {"centre_of_rotation", 1000.0 * rise[2]}, {"rig", 1000.0 * rise[3]}}},
+                                {"roughness_floor_mm", 1000.0 * clip.surface.roughness_floor},
+                                {"roughness_ratio", roughnessRatio(clip.surface)},
                                 {"edge_strain_p95_percent", percentPerSkinning(clip.surface.edge_strain)},
                                 {"area_strain_p95_percent", percentPerSkinning(clip.surface.area_strain)},
                                 {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)},

@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""Counts issue 29's goals from the `bake --stats` files scripts/skin-goals.sh writes (docs/deformation-quality.md,
+"Eight characters and more levers"):
+  roughness: clips whose rig roughness rise is within 1.2x plain skinning's (`roughness_ratio`, as validate judges);
+  halved:    arm clips whose whole-body volume change under the rig is at most half of plain skinning's;
+  creases:   crease samples (clip x crease) where no more vertices pass through the opposing skin under the
+             rig than under plain skinning and it comes no more than 0.5 mm closer;
+  regions:   characters on which no body region loses more than 1 point of volume beyond plain skinning.
+Usage: skin-goals.py OUT_DIR [--json]"""
+import json
+import os
+import sys
+
+ARM_CLIPS = {"ElbowFlexion", "ArmRaise", "rom_elbow_flexion", "rom_shoulder_abduction", "rom_shoulder_flexion"}
+NAMES = ["mannequin", "cyberpunk", "soldier", "male_casual", "female_casual", "cowboy", "cesiumman", "kaykit"]
+
+
+def crease_no_worse(rig, plain):
+    if rig["through_vertices"] > plain["through_vertices"]:
+        return False
+    if plain["closest_mm"] is None or rig["closest_mm"] is None:
+        return True  # no skin faces skin within reach under one of them: nothing closer
+    return rig["closest_mm"] >= plain["closest_mm"] - 0.5
+
+
+def score(out):
+    rows, totals = [], {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0], "regions": [0, 0]}
+    for name in NAMES:
+        stats = json.load(open(os.path.join(out, name + ".stats.json")))
+        quality = stats["deformation_quality"]
+        clips = list(quality["body"]["per_clip"].keys())
+        ratios = [v["roughness_ratio"] for v in quality["surface"]["per_clip"].values()]
+        row = {"character": name, "clips": len(clips), "roughness": [sum(r <= 1.2 for r in ratios), len(ratios)],
+               "roughest": max(ratios)}
+        arm = [c for c in clips if c in ARM_CLIPS]
+        halved = [c for c in arm
+                  if abs(quality["body"]["per_clip"][c]["rig"]["change_percent"])
+                  <= 0.5 * abs(quality["body"]["per_clip"][c]["input"]["change_percent"])]
+        row["halved"] = [len(halved), len(arm)]
+        samples = [(c, k, v) for c, per in quality["creases"]["per_clip"].items() for k, v in per.items()]
+        row["creases"] = [sum(crease_no_worse(v["rig"], v["input"]) for _, _, v in samples), len(samples)]
+        worst = (0.0, None, None)
+        for region, data in quality["regions"].items():
+            for clip, v in data["per_clip"].items():
+                loss = max(0.0, min(v["input"]["change_percent"], 0.0) - v["rig"]["change_percent"])
+                if loss > worst[0]:
+                    worst = (loss, region, clip)
+        row["worst_region"] = {"points": worst[0], "region": worst[1], "clip": worst[2]}
+        row["regions"] = [1 if worst[0] <= 1.0 else 0, 1]
+        rows.append(row)
+        for key in totals:
+            totals[key][0] += row[key][0]
+            totals[key][1] += row[key][1]
+    return rows, totals
+
+
+def main():
+    if len(sys.argv) < 2:
+        sys.exit(__doc__)
+    rows, totals = score(sys.argv[1])
+    if "--json" in sys.argv:
+        print(json.dumps({"characters": rows, "totals": totals}, indent=2))
+        return
+    print("%-14s %10s %9s %8s %9s  %s" % ("character", "roughness", "roughest", "halved", "creases",
+                                          "worst region loss beyond plain (points)"))
+    for r in rows:
+        w = r["worst_region"]
+        print("%-14s %6d/%-3d %8.2fx %4d/%-3d %5d/%-3d  %.2f %s %s" % (
+            r["character"], *r["roughness"], r["roughest"], *r["halved"], *r["creases"], w["points"], w["region"] or "", w["clip"] or ""))
+    print("%-14s %6d/%-3d %9s %4d/%-3d %5d/%-3d  %d/%d characters within 1 point" % (
+        "total", *totals["roughness"], "", *totals["halved"], *totals["creases"], *totals["regions"]))
+
+
+if __name__ == "__main__":
+    main()
