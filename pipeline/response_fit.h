@@ -88,7 +88,9 @@ struct ResponseFitOptions {
   // swelling into a fold does not pay (the row's value stays the signed volume). docs/deformation-quality.md,
   // "The fit on the occupied volume".
   bool occupied_volume = false;
-  // Bounds on the amplitudes. Compression: [min_compression_fraction x the talk's, max_amplitude];
+  // Bounds on the amplitudes. Compression: [min_compression_fraction x the talk's, max_amplitude x
+  // min(1, 4 x the talk's)] (nearer rest than a quarter of the talk's compression, the bound falls to 0
+  // with the talk's amplitude: no spike of a bulge where the clips barely shorten a muscle);
   // stretch: [0, max_stretch_amplitude] and no thinner across the fibre than min_stretch_scale (a
   // stretched muscle thins, never swells); twist: [-min_twist_amplitude, max_twist_amplitude] (a twist
   // may ease a bulge a little).

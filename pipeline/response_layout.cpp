@@ -180,6 +180,10 @@ std::vector<double> keyReach(const ResponseLayout& layout, const MuscleSet& musc
   return reach;
 }
 
+// A compression key's upper bound is max_amplitude where the poses compress the muscle at least 1/4
+// as far as the talk's full compression, and falls in proportion nearer rest (docs/muscle-model.md).
+constexpr double kCompressionBoundRise = 4.0;
+
 HingeBounds amplitudeBounds(const ResponseLayout& layout, const Eigen::VectorXd& talk, const ResponseFitOptions& options) {
   const int unknowns = layout.unknowns();
   HingeBounds bounds;
@@ -200,7 +204,7 @@ HingeBounds amplitudeBounds(const ResponseLayout& layout, const Eigen::VectorXd&
       bounds.upper[u] = thinning > 0.0 ? std::min(options.max_stretch_amplitude, (1.0 - options.min_stretch_scale) / thinning) : 0.0;
     } else {
       bounds.lower[u] = options.min_compression_fraction * talk[u];
-      bounds.upper[u] = options.max_amplitude;
+      bounds.upper[u] = options.max_amplitude * std::min(1.0, kCompressionBoundRise * talk[u]);
     }
   }
   return bounds;

@@ -29,6 +29,7 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
     if (first == v) {
       surface.weld_of_vertex[v] = surface.weldedCount();
       surface.vertex_of_weld.push_back(v);
+      surface.bind.push_back(part.positions[static_cast<size_t>(v)]);
     } else {
       surface.weld_of_vertex[v] = surface.weld_of_vertex[first];
     }
@@ -46,6 +47,76 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
   surface.whole = closePatch(surface, all);
   return surface;
 }
+
+namespace {
+
+// Where k > 1 boundary steps leave a vertex v (openings, or meshes beyond a border, touching there),
+// pairs each step u -> v in with a step v -> w out across the same gap: about v's normal (its
+// triangles' area-weighted), the surface's triangles at v run anticlockwise from each step in to a step
+// out (the boundary edge v -> u of a triangle (v, u, x) to the edge y -> v of another), and a gap, the
+// opening, runs anticlockwise from a step out to the next step in. So u pairs with the first w met
+// turning clockwise from u (the pairs by ascending clockwise angle, each step in one pair). Each
+// opening is then its own loop (two tangent holes two caps, not one figure-eight), and a mesh filling
+// the gap beyond a border, whose steps there run w -> v -> u, traces the same loop backwards: their
+// caps cancel. Returns per step (index into `steps`) the step that follows it, or -1.
+std::vector<int> continuationsAcrossGaps(const std::vector<std::pair<int, int>>& steps, const std::vector<std::array<int, 3>>& local_triangles,
+                                         const std::vector<int>& welded_of, const std::vector<Eigen::Vector3d>& bind) {
+  std::vector<int> next_of_step(steps.size(), -1);
+  std::map<int, Eigen::Vector3d> normal_at;  // touching vertex -> its normal (unnormalised)
+  for (size_t s = 0; s + 1 < steps.size(); ++s) {
+    if (steps[s].first == steps[s + 1].first) normal_at.emplace(steps[s].first, Eigen::Vector3d::Zero());
+  }
+  if (normal_at.empty()) return next_of_step;
+  auto position = [&](int local) -> const Eigen::Vector3d& { return bind[static_cast<size_t>(welded_of[static_cast<size_t>(local)])]; };
+  for (const auto& t : local_triangles) {
+    for (int k = 0; k < 3; ++k) {
+      auto found = normal_at.find(t[k]);
+      if (found == normal_at.end()) continue;
+      const Eigen::Vector3d& a = position(t[k]);
+      found->second += (position(t[(k + 1) % 3]) - a).cross(position(t[(k + 2) % 3]) - a);
+    }
+  }
+  std::map<int, std::vector<int>> into;  // touching vertex -> the steps into it
+  for (size_t s = 0; s < steps.size(); ++s) {
+    if (normal_at.count(steps[s].second)) into[steps[s].second].push_back(static_cast<int>(s));
+  }
+  constexpr double kTurn = 2.0 * 3.14159265358979323846;
+  struct Pair {
+    double clockwise;  // radians from u clockwise to w, in (0, 2 pi]
+    int in, out;
+  };
+  for (const auto& [v, in_steps] : into) {
+    const Eigen::Vector3d& centre = position(v);
+    const Eigen::Vector3d normal = normal_at[v].normalized();
+    const Eigen::Vector3d x_axis = normal.unitOrthogonal(), y_axis = normal.cross(x_axis);
+    auto angle = [&](int local) {
+      const Eigen::Vector3d d = position(local) - centre;
+      return std::atan2(d.dot(y_axis), d.dot(x_axis));
+    };
+    std::vector<Pair> pairs;
+    for (size_t out = static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(v, std::numeric_limits<int>::min())) - steps.begin());
+         out < steps.size() && steps[out].first == v; ++out) {
+      const double at_w = angle(steps[out].second);
+      for (int in : in_steps) {
+        double clockwise = std::fmod(angle(steps[static_cast<size_t>(in)].first) - at_w + 2.0 * kTurn, kTurn);
+        if (clockwise <= 0.0) clockwise += kTurn;
+        pairs.push_back({clockwise, in, static_cast<int>(out)});
+      }
+    }
+    std::sort(pairs.begin(), pairs.end(), [](const Pair& x, const Pair& y) {
+      return std::tie(x.clockwise, x.in, x.out) < std::tie(y.clockwise, y.in, y.out);
+    });
+    std::vector<int> taken;  // steps out already paired (a few per vertex)
+    for (const Pair& pair : pairs) {
+      if (next_of_step[static_cast<size_t>(pair.in)] >= 0 || std::find(taken.begin(), taken.end(), pair.out) != taken.end()) continue;
+      next_of_step[static_cast<size_t>(pair.in)] = pair.out;
+      taken.push_back(pair.out);
+    }
+  }
+  return next_of_step;
+}
+
+}  // namespace
 
 ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles) {
   ClosedPatch patch;
@@ -94,25 +165,37 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
     }
   }
   std::sort(steps.begin(), steps.end());
+  const std::vector<int> next_of_step = continuationsAcrossGaps(steps, local_triangles, welded_of, surface.bind);
   std::vector<char> used(steps.size(), 0);
   auto firstStepFrom = [&](int from) {
     return static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(from, std::numeric_limits<int>::min())) -
                                steps.begin());
   };
+  constexpr size_t kClosed = std::numeric_limits<size_t>::max(), kOpen = kClosed - 1;
   for (size_t start_step = 0; start_step < steps.size(); ++start_step) {
     if (used[start_step]) continue;
     const int start = steps[start_step].first;
+    // After step s: its paired step while free (the loop closes on reaching its first step), else
+    // back at the start closes it, else the smallest free step on.
+    auto stepAfter = [&](size_t s) {
+      const int paired = next_of_step[s];
+      if (paired >= 0 && static_cast<size_t>(paired) == start_step) return kClosed;
+      if (paired >= 0 && !used[static_cast<size_t>(paired)]) return static_cast<size_t>(paired);
+      const int at = steps[s].second;
+      if (at == start) return kClosed;
+      size_t step = firstStepFrom(at);
+      while (step < steps.size() && steps[step].first == at && used[step]) ++step;
+      return step < steps.size() && steps[step].first == at ? step : kOpen;  // open: a non-manifold chain, capped as it is
+    };
     std::vector<int> loop = {welded_of[static_cast<size_t>(start)]};
-    int to = steps[start_step].second;
     used[start_step] = 1;
-    while (to != start) {
-      loop.push_back(welded_of[static_cast<size_t>(to)]);
-      size_t step = firstStepFrom(to);
-      if (step == steps.size() || steps[step].first != to) break;  // an open chain (non-manifold): cap what there is
-      while (step < steps.size() && steps[step].first == to && used[step]) ++step;
-      if (step == steps.size() || steps[step].first != to) break;
-      used[step] = 1;
-      to = steps[step].second;
+    for (size_t step = start_step;;) {
+      const size_t next = stepAfter(step);
+      if (next == kClosed) break;
+      loop.push_back(welded_of[static_cast<size_t>(steps[step].second)]);
+      if (next == kOpen) break;
+      used[next] = 1;
+      step = next;
     }
     if (loop.size() >= 3) patch.holes.push_back(std::move(loop));
   }

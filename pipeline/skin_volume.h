@@ -26,6 +26,7 @@ struct VolumeSurface {
   std::vector<int> vertex_of_weld;    // welded vertex -> its first part vertex
   std::vector<int> part_triangle;     // welded triangle -> index in MeshPart::triangles
   ClosedPatch whole;                  // every non-degenerate triangle, and the part's own holes
+  std::vector<Eigen::Vector3d> bind;  // welded vertex -> its first part vertex's bind position
   int weldedCount() const { return static_cast<int>(vertex_of_weld.size()); }
 };
 
@@ -39,7 +40,11 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance);
 inline double bodyWeldTolerance(double body_height) { return 1e-6 * std::max(body_height, 1e-3); }
 
 // The given welded triangles (indices into surface.whole.triangles) and their boundary loops: edges
-// used by one of them only. Edges shared by three or more triangles are left as they are.
+// used by one of them only. Edges shared by three or more triangles are left as they are. Where
+// openings touch at a vertex, each step into it goes on by the step out of it across the same opening,
+// found by turning about the vertex at the bind pose (docs/deformation-quality.md, "Holes are capped"):
+// the loops do not depend on the numbering, and two meshes that share a border close it with the same
+// loops.
 ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& triangles);
 
 // The vertices (indices below `count`) a patch's triangles and holes use, each once, ascending.

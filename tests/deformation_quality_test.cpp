@@ -192,15 +192,19 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   INFO(bake.err);
   REQUIRE(bake.exit_code == 0);
   const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "f.json"))["deformation_quality"];
-  // Exit 0 with the input's own weights, as the bake's worst region (0.73 points) says; 4 without, where
-  // a chest region the bake does not measure loses 1.52 points beyond the handed-back skinning.
+  // With the input's own weights validate judges the bake's regions: its exit status follows the bake's
+  // worst region (measured: the abdomen in Female_Run, 3.42 points; 0.73 before the caps paired the
+  // steps where openings touch, when the abdomen was not measured). Without, other regions (measured: a
+  // chest region the bake does not measure lost 1.52 points beyond the handed-back skinning).
+  std::string worst_where;
+  const int own_exit = worstRegionLoss(stats, &worst_where) > 1.0 ? 4 : 0;
   const auto validated = [&](const std::string& extra, const std::string& name, int exit_code) {
     const CliResult run = runCli("validate " + (dir / "f.glb") + " --rom --no-pictures " + extra + " --report " + (dir / name));
     INFO(run.err);
     CHECK(run.exit_code == exit_code);
     return nlohmann::json::parse(slurp(dir / (name + "/report.json")))["deformation_quality"];
   };
-  const nlohmann::json own = validated("--input " + input, "own", 0);
+  const nlohmann::json own = validated("--input " + input, "own", own_exit);
   const nlohmann::json handed_back = validated("", "handed_back", 4);
   CHECK(own["input_weights_from"] == "Female_Casual.fbx");
   CHECK(handed_back["input_weights_from"].is_null());
@@ -222,7 +226,7 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
       ++compared;
     }
   }
-  CHECK(compared == 378);  // 18 regions, 21 clips
+  CHECK(compared == 399);  // 19 regions, 21 clips (18 before the abdomen was measured)
   std::string where;
   CHECK(worstRegionLoss(own, &where) == Approx(worstRegionLoss(stats, &where)).margin(0.005));
 }
