@@ -407,19 +407,19 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "may stand out of its neighbours' plane by more than plain skinning's there plus what keeps the "
                       "95th percentile within this many times plain skinning's roughness rise (issue 29's goal is "
                       "1.2); the muscles then keep what volume they can within it. 0: no bound. Measured on eight "
-                      "characters at 1.2: every clip within 1.2x plain skinning's roughness (without the cap 77 of 128), "
-                      "but the rig's volume change is 0.93 of plain skinning's on the median clip instead of 0.66, and 1 "
-                      "of 20 arm clips keeps half of it instead of 7 (docs/deformation-quality.md, \"The roughness "
-                      "cap\")")
+                      "characters at 1.2 and 10 influences: every clip within 1.2x plain skinning's roughness (without "
+                      "the cap 78 of 128), but the rig's volume change is 0.94 of plain skinning's on the median clip "
+                      "instead of 0.66, and 1 of 20 arm clips keeps half of it instead of 7 (scripts/skin-goals.sh; "
+                      "docs/deformation-quality.md, \"The roughness cap\")")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
   command->add_option("--fit-volume", options->fit_volume,
                       "Which volume the response fit keeps: signed = the enclosed volume, where skin pushed into a fold "
                       "counts twice; occupied = skin inside other skin at a fitted pose earns nothing, so the muscles do "
-                      "not swell into folds. Use it with --fit-smoothness (alone it is not stable): at 300 on Quaternius "
-                      "Cyberpunk it halved plain skinning's occupied-volume change on 15 of 22 clips instead of 8, "
-                      "roughness at most 2.10x instead of 2.34x (docs/deformation-quality.md, \"The fit on the occupied "
-                      "volume\")")
+                      "not swell into folds. Use it with --fit-smoothness (alone it is not stable): at 200 on Quaternius "
+                      "Cyberpunk (10 influences) it halves plain skinning's occupied-volume change on 11 of 22 clips "
+                      "instead of 8 at the same roughness, 2.35x against 2.34x (at 300, 6 against 7: "
+                      "docs/deformation-quality.md, \"The fit on the occupied volume\")")
       ->check(CLI::IsMember({"signed", "occupied"}))
       ->capture_default_str();
   command->add_option("--muscle-motion", options->muscle_motion,
