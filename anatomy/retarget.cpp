@@ -359,7 +359,6 @@ bool carryThroughFrames(const MusclePart& part, const std::array<Anchor, 3>& anc
   return between_ends;
 }
 
-
 }  // namespace
 
 MuscleSet retargetMuscles(const MuscleSet& source, const Character& src, const LandmarkSet& src_landmarks,

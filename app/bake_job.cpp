@@ -31,7 +31,6 @@ class Stopwatch {
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
 
-
 // Placed on the character, read as the file gives them, or read against their own character and
 // retargeted onto this one.
 MuscleSet muscleSetOf(const BakeRequest& request, const Presets& presets, const ResolvedCharacter& target,

@@ -109,5 +109,4 @@ void checkOutputOptions(std::initializer_list<OutputOption> outputs, bool json_o
   }
 }
 
-
 }  // namespace rigbake::cli

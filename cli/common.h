@@ -83,5 +83,4 @@ auto withFlagNames(const std::vector<FlagName>& flags, Call&& call) -> decltype(
   }
 }
 
-
 }  // namespace rigbake::cli

@@ -381,7 +381,7 @@ FrameVolumes bindVolumes(const std::vector<PreparedPart>& prepared, size_t regio
   bind.regions.assign(region_count, {0, 0, 0});
   if (!quality) return bind;
   for (const PreparedPart& part : prepared) {
-    const std::vector<Eigen::Vector3d> welded = weldedPositions(part.surface, part.mesh->positions);
+    const std::vector<Eigen::Vector3d>& welded = part.surface.bind;
     const double body = enclosedVolume(part.surface.whole, welded);
     for (int k = 0; k < 3; ++k) bind.body[k] += body;
     for (size_t r = 0; r < region_count; ++r) {

@@ -50,6 +50,12 @@ VolumeSurface buildVolumeSurface(const MeshPart& part, double weld_tolerance) {
 
 namespace {
 
+// The first of the sorted (from, to) steps that leaves `from` (steps.size() when none does).
+size_t firstStepFrom(const std::vector<std::pair<int, int>>& steps, int from) {
+  return static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(from, std::numeric_limits<int>::min())) -
+                             steps.begin());
+}
+
 // Where k > 1 boundary steps leave a vertex v (openings, or meshes beyond a border, touching there),
 // pairs each step u -> v in with a step v -> w out across the same gap: about v's normal (its
 // triangles' area-weighted), the surface's triangles at v run anticlockwise from each step in to a step
@@ -94,8 +100,7 @@ std::vector<int> continuationsAcrossGaps(const std::vector<std::pair<int, int>>&
       return std::atan2(d.dot(y_axis), d.dot(x_axis));
     };
     std::vector<Pair> pairs;
-    for (size_t out = static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(v, std::numeric_limits<int>::min())) - steps.begin());
-         out < steps.size() && steps[out].first == v; ++out) {
+    for (size_t out = firstStepFrom(steps, v); out < steps.size() && steps[out].first == v; ++out) {
       const double at_w = angle(steps[out].second);
       for (int in : in_steps) {
         double clockwise = std::fmod(angle(steps[static_cast<size_t>(in)].first) - at_w + 2.0 * kTurn, kTurn);
@@ -167,10 +172,6 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
   std::sort(steps.begin(), steps.end());
   const std::vector<int> next_of_step = continuationsAcrossGaps(steps, local_triangles, welded_of, surface.bind);
   std::vector<char> used(steps.size(), 0);
-  auto firstStepFrom = [&](int from) {
-    return static_cast<size_t>(std::lower_bound(steps.begin(), steps.end(), std::make_pair(from, std::numeric_limits<int>::min())) -
-                               steps.begin());
-  };
   constexpr size_t kClosed = std::numeric_limits<size_t>::max(), kOpen = kClosed - 1;
   for (size_t start_step = 0; start_step < steps.size(); ++start_step) {
     if (used[start_step]) continue;
@@ -183,7 +184,7 @@ ClosedPatch closePatch(const VolumeSurface& surface, const std::vector<int>& tri
       if (paired >= 0 && !used[static_cast<size_t>(paired)]) return static_cast<size_t>(paired);
       const int at = steps[s].second;
       if (at == start) return kClosed;
-      size_t step = firstStepFrom(at);
+      size_t step = firstStepFrom(steps, at);
       while (step < steps.size() && steps[step].first == at && used[step]) ++step;
       return step < steps.size() && steps[step].first == at ? step : kOpen;  // open: a non-manifold chain, capped as it is
     };
@@ -390,7 +391,7 @@ MeasuredSurfaces measuredSurfaces(const Character& character, const std::vector<
     VolumeSurface surface = buildVolumeSurface(mesh, weld_tolerance);
     std::vector<int> welded_of_part(mesh.triangles.size(), -1);
     for (size_t t = 0; t < surface.part_triangle.size(); ++t) welded_of_part[surface.part_triangle[t]] = static_cast<int>(t);
-    const std::vector<Eigen::Vector3d> welded = weldedPositions(surface, mesh.positions);
+    const std::vector<Eigen::Vector3d>& welded = surface.bind;
     out.body_volume += enclosedVolume(surface.whole, welded);
     // Each region closed on its own, the regions on the bake's threads; their volumes and areas are
     // added up in region order.

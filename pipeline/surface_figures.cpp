@@ -105,7 +105,7 @@ SurfacePart surfacePart(const MeshPart& mesh, const MeasuredPart& weights, int s
   for (size_t t = 0; t < triangles.size(); ++t)
     for (int corner : triangles[t])
       if (moving_index[static_cast<size_t>(corner)] >= 0) part.around[static_cast<size_t>(moving_index[static_cast<size_t>(corner)])].push_back(static_cast<int>(t));
-  const std::vector<Eigen::Vector3d> bind = weldedPositions(part.surface, mesh.positions);
+  const std::vector<Eigen::Vector3d>& bind = part.surface.bind;
   part.bind_roughness = roughness(part, bind);
   for (size_t t = 0; t < triangles.size(); ++t) {
     const auto& tri = triangles[t];
@@ -295,7 +295,7 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
   std::vector<std::vector<Eigen::Vector3d>> bind_welded;
   for (const MeasuredPart& part : parts) {
     surfaces.push_back(surfacePart(character.meshes[part.mesh_part], part, skeleton_joints, weld_tolerance, threads, true));
-    bind_welded.push_back(weldedPositions(surfaces.back().surface, character.meshes[part.mesh_part].positions));
+    bind_welded.push_back(surfaces.back().surface.bind);
     bind_volume += enclosedVolume(surfaces.back().surface.whole, bind_welded.back());
   }
   const OccupancyGrid grid = bindOccupancyGrid(character, parts);

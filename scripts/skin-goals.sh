@@ -2,7 +2,7 @@
 # Issue 29's goals, counted on the eight characters the docs measure them on (docs/deformation-quality.md,
 # "Eight characters and more levers"): bakes each with `--stats` (gow_biped, the given influences, ROM
 # clips where the character has no arm clips of its own) and prints the four counts and, per character,
-# what they are made of. Slow (minutes): a measuring tool, not a test.
+# what they are made of. About 10 s on two cores, but a measuring tool, not a test.
 #
 # Usage: scripts/skin-goals.sh OUT_DIR [rigbake] [-- extra bake flags...]
 #   OUT_DIR keeps every bake's GLB, stats and log; a second run with the same OUT_DIR re-bakes.
