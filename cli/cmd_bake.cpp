@@ -138,6 +138,8 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
     std::cerr << std::setprecision(2) << "body region losing most beyond plain skinning: '" << bake.quality.regions[region] << "' in '"
               << region_clip->clip << "', " << loss << " points (input skinning " << std::showpos << 100.0 * v.input.change
               << " %, rig " << 100.0 * v.rig.change << " %)" << std::noshowpos;
+    if (region < region_clip->region_places.size() && region_clip->region_places[region].found)
+      std::cerr << ", " << regionLossPlaceText(region_clip->region_places[region]);
     if (loss > allowed)
       std::cerr << "; more than the " << std::setprecision(0) << allowed << " point `rigbake validate` allows by default (SKIN_REGION_VOLUME_LOSS, an error)";
     std::cerr << "\n";

@@ -27,6 +27,20 @@ nlohmann::json moveJson(const MuscleSkinMove& move) {
           {"vertices", move.vertices}};
 }
 
+// Where the rig takes most of a region's volume against plain skinning, and how much (points of its
+// bind volume); beside it the whole difference at that sample, first-order and measured.
+nlohmann::json lossPlaceJson(const RegionLossPlace& place) {
+  return {{"mesh", place.mesh},
+          {"gltf_mesh", place.gltf_mesh},
+          {"primitive", place.gltf_primitive},
+          {"vertex", place.vertex},
+          {"bind_position", {place.bind.x(), place.bind.y(), place.bind.z()}},
+          {"time_s", place.time},
+          {"points", place.points},
+          {"rig_minus_input_points", place.difference_points},
+          {"first_order_points", place.first_order_points}};
+}
+
 nlohmann::json contactJson(const CreaseMethodContact& contact) {
   return {{"closest_mm", contact.opposed ? nlohmann::json(1000.0 * contact.closest) : nlohmann::json(nullptr)},
           {"through_vertices", contact.through},
@@ -41,7 +55,11 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
   nlohmann::json regions = nlohmann::json::object();
   for (size_t r = 0; r < quality.regions.size(); ++r) {
     nlohmann::json per_clip = nlohmann::json::object();
-    for (const ClipQuality& clip : quality.clips) per_clip[clip.clip] = volumesJson(clip.regions[r]);
+    for (const ClipQuality& clip : quality.clips) {
+      per_clip[clip.clip] = volumesJson(clip.regions[r]);
+      if (r < clip.region_places.size() && clip.region_places[r].found)
+        per_clip[clip.clip]["rig"]["lost_most_at"] = lossPlaceJson(clip.region_places[r]);
+    }
     regions[quality.regions[r]] = {{"bind_volume_m3", quality.region_volumes[r]}, {"per_clip", per_clip}};
   }
   nlohmann::json muscles = nlohmann::json::object();

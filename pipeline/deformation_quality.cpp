@@ -695,6 +695,42 @@ void clipExtremes(const std::vector<MeasuredClip>& clips, const FramePlan& plan,
   }
 }
 
+// Where each region that loses beyond plain skinning in a clip loses it (pipeline/region_loss_place.h),
+// at the rig's extreme sample; one task per clip and region, so the same at any thread count.
+void locateRegionLosses(const Character& character, const std::vector<MeasuredPart>& parts, const std::vector<MeasuredClip>& clips,
+                        const std::vector<PreparedPart>& prepared, int threads, DeformationQuality* figures) {
+  const size_t region_count = figures->regions.size();
+  std::vector<std::pair<size_t, size_t>> tasks;  // (clip, region)
+  for (size_t c = 0; c < figures->clips.size(); ++c) {
+    figures->clips[c].region_places.assign(region_count, RegionLossPlace{});
+    for (size_t k = 0; k < region_count; ++k)
+      if (regionLossBeyondInput(figures->clips[c].regions[k]) > 0.0) tasks.emplace_back(c, k);
+  }
+  std::vector<RegionLossScratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, tasks.size(), 1)));
+  parallelForWorkers(threads, tasks.size(), 1, [&](size_t worker, size_t, size_t i, size_t) {
+    const auto [c, k] = tasks[i];
+    const MeasuredClip& clip = clips[c];
+    const double time = figures->clips[c].regions[k].rig.time;
+    const auto at = std::find(clip.times.begin(), clip.times.end(), time);
+    if (at == clip.times.end()) return;
+    std::vector<RegionPiece> pieces;
+    for (size_t p = 0; p < prepared.size(); ++p)
+      pieces.push_back(RegionPiece{parts[p].mesh_part, &prepared[p].surface, &prepared[p].regions[k].patch,
+                                   &character.meshes[static_cast<size_t>(parts[p].mesh_part)].positions, &parts[p].input,
+                                   &parts[p].rig});
+    RegionLossPlace place =
+        regionLossPlace(pieces, (*clip.frames)[static_cast<size_t>(at - clip.times.begin())], figures->region_volumes[k], time,
+                        &scratch[worker]);
+    if (place.found) {
+      const MeshPart& mesh = character.meshes[static_cast<size_t>(place.mesh_part)];
+      place.mesh = mesh.name;
+      place.gltf_mesh = mesh.gltf_mesh;
+      place.gltf_primitive = mesh.gltf_primitive;
+    }
+    figures->clips[c].region_places[k] = std::move(place);
+  });
+}
+
 // A muscle's skin move at its sample, when `wanted` (compressed or stretched there).
 MuscleSkinMove skinMoveAt(const std::vector<MeasuredClip>& clips, const FramePlan& plan,
                           const std::vector<std::vector<MoveSums>>& all_moves, int m, const FramePlan::Sample& sample, bool wanted) {
@@ -768,6 +804,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
   if (!quality) return measures;
 
   clipExtremes(clips, plan, pass.volumes, bind, region_count, &figures);
+  locateRegionLosses(character, parts, clips, prepared, threads, &figures);
   for (int m = 0; m < muscle_count; ++m) {
     MuscleQuality muscle;
     muscle.muscle = muscles.parts[m].fullName();

@@ -16,6 +16,7 @@
 #include "pipeline/deformation_error.h"
 #include "pipeline/influences.h"
 #include "pipeline/quantize_for_motion.h"
+#include "pipeline/region_loss_place.h"
 #include "pipeline/skin_volume.h"
 
 namespace rigbake {
@@ -143,6 +144,10 @@ struct ClipQuality {
   SurfaceFigures surface;
   std::vector<CreaseContact> creases;  // the creases this clip bends at least kMinCreaseBend
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
+  // Per region (same order): where the rig takes most of the region's volume against plain skinning at
+  // the rig's extreme sample (pipeline/region_loss_place.h); measured only where the region loses
+  // beyond plain skinning (regionLossBeyondInput() > 0), found = false elsewhere.
+  std::vector<RegionLossPlace> region_places;
   std::vector<JointRegionLoss> joint_regions;  // DeformationQuality::joint_regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks
 };

@@ -154,10 +154,11 @@ CheckResult checkRegionVolumeLoss(const ValidationInputs& inputs, const Validati
   for (const ClipQuality& clip : quality.clips) {
     for (size_t r = 0; r < clip.regions.size(); ++r) {
       const SkinningVolumes& v = clip.regions[r];
+      const std::string place = r < clip.region_places.size() ? regionLossPlaceText(clip.region_places[r]) : "";
       measurement.add(regionLossBeyondInput(v), clip.clip + "/" + quality.regions[r],
                       "input skinning " + fixedDecimals(100.0 * v.input.change, 2) + " %, dual quaternions " +
                           fixedDecimals(100.0 * v.dual_quaternion.change, 2) + " %, rig " + fixedDecimals(100.0 * v.rig.change, 2) +
-                          " % at " + fixedDecimals(v.rig.time, 2) + " s");
+                          " % at " + fixedDecimals(v.rig.time, 2) + " s" + (place.empty() ? "" : "; " + place));
     }
   }
   measurement.finish(std::to_string(quality.regions.size()) + " regions over " + std::to_string(quality.clips.size()) +
