@@ -675,7 +675,8 @@ std::string qualitySection(const Report& report, const std::vector<std::string>&
       html += "<figure><img alt=\"" + esc(picture.title) + "\" width=\"" + std::to_string(picture.image.width) +
               "\" height=\"" + std::to_string(picture.image.height) + "\" src=\"" + picture_uris[i] +
               "\"><figcaption><b>" + esc(picture.title) + "</b><br>" + esc(picture.panels) + ": " +
-              (picture.note.empty() ? std::string(caption) : esc(picture.note)) + "</figcaption></figure>\n";
+              (picture.note.empty() ? std::string(caption) : esc(picture.note)) +
+              (picture.marker.empty() ? std::string() : "<br>" + esc(picture.marker)) + "</figcaption></figure>\n";
     }
     html += "</div>\n";
   }

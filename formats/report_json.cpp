@@ -102,6 +102,8 @@ nlohmann::ordered_json reportJsonValue(const Report& report) {
                           {"heatmap_full_scale_mm", number(1000.0 * picture.scale)},
                           {"max_out_mm", number(1000.0 * picture.max_out)},
                           {"max_in_mm", number(1000.0 * picture.max_in)}});
+      // A region's picture that rings the place taking most of its loss (pipeline/region_loss_place.h).
+      if (!picture.marker.empty()) pictures.back()["ring"] = picture.marker;
     }
     quality["pictures"] = pictures;
   } else {

@@ -19,9 +19,12 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <map>
 
 #include "core/error.h"
+#include "pipeline/check_registry.h"
+#include "pipeline/check_support.h"
 #include "pipeline/influences.h"
 #include "pipeline/muscle_joint.h"
 #include "pipeline/parallel.h"
@@ -103,6 +106,9 @@ struct PictureRequest {
   // (no heatmap), with `note` as its caption.
   bool methods = false;
   std::string note;
+  // A ring around one welded vertex of one drawn part (-1: none), and what it marks.
+  int marker_part = -1, marker_vertex = -1;
+  std::string marker;
 };
 
 // Each muscle kind (LeftBicep and RightBicep are one) at the most compressed sample of either side;
@@ -165,7 +171,7 @@ void addMusclePictureRequests(const DeformationQuality& quality, const std::vect
     requests.push_back({quality.muscles[m].muscle + (quality.muscles[m].kind == PartKind::kCorrective ? " (corrective)" : "") +
                             " at its most " + (stretched ? "stretched" : "compressed") + " (length ratio " + ratio + "), " +
                             move.clip + " at " + formatSeconds(move.time),
-                        quality.muscles[m].muscle, c, move.time, std::move(on), false, {}});
+                        quality.muscles[m].muscle, c, move.time, std::move(on), false, {}, -1, -1, {}});
   }
 }
 
@@ -214,7 +220,7 @@ void addCreasePictureRequests(const DeformationQuality& quality, const std::vect
     }
     PictureRequest request{"crease " + contact->crease + " bent " + bend + " degrees, " + quality.clips[c].clip + " at " +
                                formatSeconds(contact->time),
-                           contact->crease, c, contact->time, std::move(on), true, note};
+                           contact->crease, c, contact->time, std::move(on), true, note, -1, -1, {}};
     requests.push_back(std::move(request));
   }
 }
@@ -477,8 +483,16 @@ bool drawPicture(const PictureScene& scene, const PictureRequest& request, Quali
     picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_quaternion, camera, size, size),
                                      renderSurfaces(plain_centred, camera, size, size), renderSurfaces(plain_rig, camera, size, size)});
   } else {
-    picture.image = besideEachOther({renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
-                                     renderSurfaces(heat, camera, size, size)});
+    std::vector<RgbImage> panels = {renderSurfaces(plain_input, camera, size, size), renderSurfaces(plain_rig, camera, size, size),
+                                    renderSurfaces(heat, camera, size, size)};
+    if (request.marker_part >= 0) {
+      const size_t p = static_cast<size_t>(request.marker_part), w = static_cast<size_t>(request.marker_vertex);
+      drawRing(camera, input[p][w], &panels[0]);
+      drawRing(camera, rig[p][w], &panels[1]);
+      drawRing(camera, rig[p][w], &panels[2]);
+      picture.marker = request.marker;
+    }
+    picture.image = besideEachOther(panels);
   }
   *drawn_picture = std::move(picture);
   return true;
@@ -505,9 +519,17 @@ void addRegionPictureRequests(const DeformationQuality& quality, const std::vect
   };
   for (size_t c = 0; c < quality.clips.size(); ++c) {
     const ClipQuality& figures = quality.clips[c];
+    // The region SKIN_REGION_VOLUME_LOSS fails in this clip, the one losing most, when there is one (so
+    // that the check's finding has its picture); else the region whose rig departs most from the input.
     int worst = -1;
-    double worst_gap = -1.0;
+    double worst_gap = -1.0, worst_loss = checkAt<checkIndex("SKIN_REGION_VOLUME_LOSS")>().threshold;
     for (size_t r = 0; r < figures.regions.size(); ++r) {
+      const double loss = regionLossBeyondInput(figures.regions[r]);
+      if (loss > worst_loss) {
+        worst_loss = loss;
+        worst = static_cast<int>(r);
+        worst_gap = std::numeric_limits<double>::infinity();
+      }
       const double gap = std::abs(figures.regions[r].rig.change - figures.regions[r].input.change);
       if (gap > worst_gap) {
         worst_gap = gap;
@@ -518,8 +540,20 @@ void addRegionPictureRequests(const DeformationQuality& quality, const std::vect
     const int r = regionIndex(quality.regions[worst]);
     if (r < 0) continue;
     const double time = figures.regions[worst].rig.time;
-    requests->push_back({figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
-                         time, regionVertices(r), false, {}});
+    PictureRequest request{figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
+                           time, regionVertices(r), false, {}, -1, -1, {}};
+    // Where the region loses most against the input skinning, when it loses beyond it.
+    if (static_cast<size_t>(worst) < figures.region_places.size() && figures.region_places[worst].found) {
+      const RegionLossPlace& place = figures.region_places[worst];
+      for (size_t p = 0; p < drawn.size(); ++p) {
+        if (drawn[p].weights->mesh_part != place.mesh_part) continue;
+        request.marker_part = static_cast<int>(p);
+        request.marker_vertex = drawn[p].surface.weld_of_vertex[static_cast<size_t>(place.vertex)];
+        request.marker = "the ring: " + regionLossPlaceText(place) + ", of the " +
+                         fixedDecimals(regionLossBeyondInput(figures.regions[worst]), 2) + " points the region loses beyond the input skinning";
+      }
+    }
+    requests->push_back(std::move(request));
   }
 }
 

@@ -144,6 +144,9 @@ struct QualityPicture {
   RgbImage image;
   std::string panels = "input | rig | move";
   std::string note;
+  // A region's picture: what the ring in its panels marks (the place that takes most of the region's
+  // volume against the input skinning, pipeline/region_loss_place.h); empty when there is no ring.
+  std::string marker;
 };
 
 struct BakedQuality {

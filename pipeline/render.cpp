@@ -17,6 +17,27 @@ Eigen::Vector3f divergingColour(double value) {
   return colour.cast<float>();
 }
 
+void drawRing(const Camera& camera, const Eigen::Vector3d& point, RgbImage* image) {
+  // The projection renderSurfaces() takes.
+  const Eigen::Vector3d forward = camera.forward.normalized();
+  const Eigen::Vector3d up = (camera.up - camera.up.dot(forward) * forward).normalized();
+  const Eigen::Vector3d right = forward.cross(up);
+  const double pixels_per_unit = 0.5 * image->height / camera.half_height;
+  const Eigen::Vector3d d = point - camera.centre;
+  const double x = 0.5 * image->width + d.dot(right) * pixels_per_unit, y = 0.5 * image->height - d.dot(up) * pixels_per_unit;
+  constexpr double kRadius = 6.0, kHalfLine = 1.0;
+  for (int row = static_cast<int>(std::floor(y - kRadius - kHalfLine)); row <= static_cast<int>(std::ceil(y + kRadius + kHalfLine)); ++row) {
+    for (int column = static_cast<int>(std::floor(x - kRadius - kHalfLine)); column <= static_cast<int>(std::ceil(x + kRadius + kHalfLine));
+         ++column) {
+      if (row < 0 || row >= image->height || column < 0 || column >= image->width) continue;
+      const double distance = std::hypot(column + 0.5 - x, row + 0.5 - y);
+      if (std::abs(distance - kRadius) > kHalfLine) continue;
+      const size_t at = (static_cast<size_t>(row) * image->width + column) * 3;
+      image->pixels[at] = image->pixels[at + 1] = image->pixels[at + 2] = 0;
+    }
+  }
+}
+
 RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera& camera, int width, int height) {
   RgbImage image;
   image.width = width;

@@ -34,6 +34,11 @@ struct RenderSurface {
 // are lit (open meshes show their inside), the side facing away slightly darker.
 RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera& camera, int width, int height);
 
+// A black ring (6 pixels across the middle of its 2-pixel line) around where `point` projects in an
+// image that renderSurfaces() drew with `camera`: a marker over the surface, drawn whether or not the
+// surface hides the point.
+void drawRing(const Camera& camera, const Eigen::Vector3d& point, RgbImage* image);
+
 // A diverging colour for a signed value in [-1, 1]: blue (inward) through white to red (outward).
 Eigen::Vector3f divergingColour(double value);
 

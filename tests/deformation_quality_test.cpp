@@ -444,7 +444,32 @@ TEST_CASE("validate: a rig that pulls a region in fails SKIN_REGION_VOLUME_LOSS,
     CHECK(check["status"] == "fail");
     CHECK(check["measured"].get<double>() > 1.0);
     CHECK(check["location"].get<std::string>().find('/') != std::string::npos);  // clip/region
+    // Each failing finding names the vertex that takes most of it (pipeline/region_loss_place.h).
+    for (const auto& finding : check["findings"])
+      if (finding["measured"].get<double>() > 1.0)
+        CHECK(finding["message"].get<std::string>().find(" points of it at vertex ") != std::string::npos);
   }
+  // With pictures, each clip whose region fails the check shows that region, the place ringed and named.
+  CliResult drawn = runCli("validate " + (dir / "baked.glb") + " --report " + (dir / "drawn"));
+  CHECK(drawn.exit_code == 4);
+  const nlohmann::json pictured = nlohmann::json::parse(slurp(dir / "drawn/report.json"));
+  std::set<std::string> failing_clips;
+  for (const auto& check : pictured["checks"]) {
+    if (check["code"] != "SKIN_REGION_VOLUME_LOSS") continue;
+    for (const auto& finding : check["findings"]) {
+      const std::string where = finding["location"];
+      if (finding["measured"].get<double>() > 1.0) failing_clips.insert(where.substr(0, where.find('/')));
+    }
+  }
+  REQUIRE(!failing_clips.empty());
+  int ringed = 0;
+  for (const auto& picture : pictured["deformation_quality"]["pictures"]) {
+    if (!failing_clips.count(picture["clip"].get<std::string>()) || !picture.contains("ring")) continue;
+    CHECK(picture["ring"].get<std::string>().rfind("the ring: ", 0) == 0);
+    ++ringed;
+  }
+  CHECK(ringed == static_cast<int>(failing_clips.size()));
+  CHECK(slurp(dir / "drawn/report.html").find("the ring: ") != std::string::npos);
 }
 
 TEST_CASE("validate --rom: the clipless KayKit mannequin and Quaternius Soldier get deformation figures and pictures") {
