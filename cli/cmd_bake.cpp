@@ -68,6 +68,7 @@ void printRoughness(const BakeCommandOptions& options, const BakeResult& bake) {
     std::cerr << std::setprecision(3) << "roughness rise (95th percentile of the moving skin), roughest against plain skinning in '"
               << roughest->clip << "': input skinning " << 1000.0 * rise[0] << " mm, dual quaternions " << 1000.0 * rise[1]
               << " mm, centres of rotation " << 1000.0 * rise[2] << " mm, rig " << 1000.0 * rise[3] << " mm";
+    if (roughest->surface.lumpiest.at.found) std::cerr << "; " << lumpPlaceText(roughest->surface.lumpiest);
     // The fit buys volume with bulges; the cap is the other side of that trade (measured on eight
     // characters: docs/deformation-quality.md, "The roughness cap"), so a bake over the check says so.
     if (rough_clips > 0 && bake.fit.parameters > 0 && options.fit_roughness_cap == 0.0)
@@ -138,7 +139,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
     std::cerr << std::setprecision(2) << "body region losing most beyond plain skinning: '" << bake.quality.regions[region] << "' in '"
               << region_clip->clip << "', " << loss << " points (input skinning " << std::showpos << 100.0 * v.input.change
               << " %, rig " << 100.0 * v.rig.change << " %)" << std::noshowpos;
-    if (region < region_clip->region_places.size() && region_clip->region_places[region].found)
+    if (region < region_clip->region_places.size() && region_clip->region_places[region].at.found)
       std::cerr << ", " << regionLossPlaceText(region_clip->region_places[region]);
     if (loss > allowed)
       std::cerr << "; more than the " << std::setprecision(0) << allowed << " point `rigbake validate` allows by default (SKIN_REGION_VOLUME_LOSS, an error)";

@@ -27,18 +27,34 @@ nlohmann::json moveJson(const MuscleSkinMove& move) {
           {"vertices", move.vertices}};
 }
 
-// Where the rig takes most of a region's volume against plain skinning, and how much (points of its
-// bind volume); beside it the whole difference at that sample, first-order and measured.
-nlohmann::json lossPlaceJson(const RegionLossPlace& place) {
+// Where to find a skin place: the file's mesh, primitive and vertex, and the bind position.
+nlohmann::json skinPlaceJson(const SkinPlace& place) {
   return {{"mesh", place.mesh},
           {"gltf_mesh", place.gltf_mesh},
           {"primitive", place.gltf_primitive},
           {"vertex", place.vertex},
-          {"bind_position", {place.bind.x(), place.bind.y(), place.bind.z()}},
-          {"time_s", place.time},
-          {"points", place.points},
-          {"rig_minus_input_points", place.difference_points},
-          {"first_order_points", place.first_order_points}};
+          {"bind_position", {place.bind.x(), place.bind.y(), place.bind.z()}}};
+}
+
+// Where the rig's skin rises most beyond plain skinning's at the roughest sample; null when nowhere.
+nlohmann::json lumpJson(const LumpPlace& lump) {
+  if (!lump.at.found) return nullptr;
+  nlohmann::json out = skinPlaceJson(lump.at);
+  out["time_s"] = lump.time;
+  out["rig_rise_mm"] = 1000.0 * lump.rig_rise;
+  out["input_rise_mm"] = 1000.0 * lump.input_rise;
+  return out;
+}
+
+// Where the rig takes most of a region's volume against plain skinning, and how much (points of its
+// bind volume); beside it the whole difference at that sample, first-order and measured.
+nlohmann::json lossPlaceJson(const RegionLossPlace& place) {
+  nlohmann::json out = skinPlaceJson(place.at);
+  out["time_s"] = place.time;
+  out["points"] = place.points;
+  out["rig_minus_input_points"] = place.difference_points;
+  out["first_order_points"] = place.first_order_points;
+  return out;
 }
 
 nlohmann::json contactJson(const CreaseMethodContact& contact) {
@@ -57,7 +73,7 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
     nlohmann::json per_clip = nlohmann::json::object();
     for (const ClipQuality& clip : quality.clips) {
       per_clip[clip.clip] = volumesJson(clip.regions[r]);
-      if (r < clip.region_places.size() && clip.region_places[r].found)
+      if (r < clip.region_places.size() && clip.region_places[r].at.found)
         per_clip[clip.clip]["rig"]["lost_most_at"] = lossPlaceJson(clip.region_places[r]);
     }
     regions[quality.regions[r]] = {{"bind_volume_m3", quality.region_volumes[r]}, {"per_clip", per_clip}};
@@ -82,6 +98,7 @@ nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
                                 {"edge_strain_p95_percent", percentPerSkinning(clip.surface.edge_strain)},
                                 {"area_strain_p95_percent", percentPerSkinning(clip.surface.area_strain)},
                                 {"centre_of_rotation_volume", extremeJson(clip.surface.centre_of_rotation)},
+                                {"lumpiest_at", lumpJson(clip.surface.lumpiest)},
                                 {"occupied_volume",
                                  {{"input", extremeJson(clip.surface.occupied[0])},
                                   {"dual_quaternion", extremeJson(clip.surface.occupied[1])},

@@ -543,12 +543,12 @@ void addRegionPictureRequests(const DeformationQuality& quality, const std::vect
     PictureRequest request{figures.clip + " at " + formatSeconds(time) + ": " + quality.regions[worst], quality.regions[worst], c,
                            time, regionVertices(r), false, {}, -1, -1, {}};
     // Where the region loses most against the input skinning, when it loses beyond it.
-    if (static_cast<size_t>(worst) < figures.region_places.size() && figures.region_places[worst].found) {
+    if (static_cast<size_t>(worst) < figures.region_places.size() && figures.region_places[worst].at.found) {
       const RegionLossPlace& place = figures.region_places[worst];
       for (size_t p = 0; p < drawn.size(); ++p) {
-        if (drawn[p].weights->mesh_part != place.mesh_part) continue;
+        if (drawn[p].weights->mesh_part != place.at.mesh_part) continue;
         request.marker_part = static_cast<int>(p);
-        request.marker_vertex = drawn[p].surface.weld_of_vertex[static_cast<size_t>(place.vertex)];
+        request.marker_vertex = drawn[p].surface.weld_of_vertex[static_cast<size_t>(place.at.vertex)];
         request.marker = "the ring: " + regionLossPlaceText(place) + ", of the " +
                          fixedDecimals(regionLossBeyondInput(figures.regions[worst]), 2) + " points the region loses beyond the input skinning";
       }

@@ -715,19 +715,11 @@ void locateRegionLosses(const Character& character, const std::vector<MeasuredPa
     if (at == clip.times.end()) return;
     std::vector<RegionPiece> pieces;
     for (size_t p = 0; p < prepared.size(); ++p)
-      pieces.push_back(RegionPiece{parts[p].mesh_part, &prepared[p].surface, &prepared[p].regions[k].patch,
-                                   &character.meshes[static_cast<size_t>(parts[p].mesh_part)].positions, &parts[p].input,
+      pieces.push_back(RegionPiece{parts[p].mesh_part, &prepared[p].surface, &prepared[p].regions[k].patch, &parts[p].input,
                                    &parts[p].rig});
-    RegionLossPlace place =
-        regionLossPlace(pieces, (*clip.frames)[static_cast<size_t>(at - clip.times.begin())], figures->region_volumes[k], time,
-                        &scratch[worker]);
-    if (place.found) {
-      const MeshPart& mesh = character.meshes[static_cast<size_t>(place.mesh_part)];
-      place.mesh = mesh.name;
-      place.gltf_mesh = mesh.gltf_mesh;
-      place.gltf_primitive = mesh.gltf_primitive;
-    }
-    figures->clips[c].region_places[k] = std::move(place);
+    figures->clips[c].region_places[k] =
+        regionLossPlace(character, pieces, (*clip.frames)[static_cast<size_t>(at - clip.times.begin())], figures->region_volumes[k],
+                        time, &scratch[worker]);
   });
 }
 

@@ -96,6 +96,7 @@ struct SurfaceFigures {
   double edge_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   double area_strain[kSurfaceSkinnings] = {0.0, 0.0, 0.0, 0.0};
   VolumeExtreme centre_of_rotation;  // the whole body's volume change, centres of rotation
+  LumpPlace lumpiest;
   // The whole body's change of occupied volume (pipeline/occupied_volume.h: each point inside the skin
   // counted once, so skin pushed through opposing skin keeps nothing), per skinning as roughness_rise;
   // the largest over the same samples.
@@ -146,7 +147,7 @@ struct ClipQuality {
   std::vector<SkinningVolumes> regions;  // DeformationQuality::regions order
   // Per region (same order): where the rig takes most of the region's volume against plain skinning at
   // the rig's extreme sample (pipeline/region_loss_place.h); measured only where the region loses
-  // beyond plain skinning (regionLossBeyondInput() > 0), found = false elsewhere.
+  // beyond plain skinning (regionLossBeyondInput() > 0), at.found = false elsewhere.
   std::vector<RegionLossPlace> region_places;
   std::vector<JointRegionLoss> joint_regions;  // DeformationQuality::joint_regions order
   int worst_frame = -1;  // the sample where the rig's whole-body change peaks

@@ -5,23 +5,26 @@
 
 namespace rigbake {
 
-RegionLossPlace regionLossPlace(const std::vector<RegionPiece>& pieces, const std::vector<Eigen::Affine3d>& frame,
-                                double bind_volume, double time, RegionLossScratch* scratch) {
+RegionLossPlace regionLossPlace(const Character& character, const std::vector<RegionPiece>& pieces,
+                                const std::vector<Eigen::Affine3d>& frame, double bind_volume, double time,
+                                RegionLossScratch* scratch) {
   RegionLossPlace place;
   place.time = time;
   if (!(bind_volume > 0.0)) return place;
   const double to_points = 100.0 / bind_volume;
   double least = 0.0;  // the most negative share so far; a place must take something to be named
+  int least_part = -1, least_vertex = -1;
   RegionLossScratch& s = *scratch;
   for (const RegionPiece& piece : pieces) {
     if (piece.patch->triangles.empty()) continue;
     const VolumeSurface& surface = *piece.surface;
+    const std::vector<Eigen::Vector3d>& bind = character.meshes[static_cast<size_t>(piece.mesh_part)].positions;
     const size_t welded_count = static_cast<size_t>(surface.weldedCount());
     const std::vector<int> vertices = patchVertices(*piece.patch, welded_count);
     s.needed.clear();
     for (int w : vertices) s.needed.push_back(surface.vertex_of_weld[static_cast<size_t>(w)]);
-    skinLinearBlend(*piece.bind_positions, *piece.input, frame, s.needed, &s.plain_listed);
-    skinLinearBlend(*piece.bind_positions, *piece.rig, frame, s.needed, &s.rig_listed);
+    skinLinearBlend(bind, *piece.input, frame, s.needed, &s.plain_listed);
+    skinLinearBlend(bind, *piece.rig, frame, s.needed, &s.rig_listed);
     // Welded-indexed, as the patch is. Only the patch's own vertices are written, and only they are read
     // (the volumes and the gradient touch no other), so what earlier calls left elsewhere does not matter.
     for (std::vector<Eigen::Vector3d>* buffer : {&s.plain, &s.rig, &s.middle, &s.gradient})
@@ -41,23 +44,19 @@ RegionLossPlace regionLossPlace(const std::vector<RegionPiece>& pieces, const st
       place.first_order_points += share;
       if (share < least) {
         least = share;
-        place.found = true;
-        place.mesh_part = piece.mesh_part;
-        place.vertex = surface.vertex_of_weld[at];
-        place.bind = (*piece.bind_positions)[static_cast<size_t>(place.vertex)];
+        least_part = piece.mesh_part;
+        least_vertex = surface.vertex_of_weld[at];
       }
     }
   }
+  if (least_part >= 0) place.at = skinPlace(character, least_part, least_vertex);
   place.points = -least;
   return place;
 }
 
 std::string regionLossPlaceText(const RegionLossPlace& place) {
-  if (!place.found) return "";
-  return fixedDecimals(place.points, 2) + " points of it at vertex " + std::to_string(place.vertex) + " of mesh '" + place.mesh +
-         "' (glTF mesh " + std::to_string(place.gltf_mesh) + ", primitive " + std::to_string(place.gltf_primitive) +
-         "; bind position " + fixedDecimals(place.bind.x(), 3) + " " + fixedDecimals(place.bind.y(), 3) + " " +
-         fixedDecimals(place.bind.z(), 3) + ")";
+  if (!place.at.found) return "";
+  return fixedDecimals(place.points, 2) + " points of it at " + skinPlaceText(place.at);
 }
 
 }  // namespace rigbake

@@ -20,32 +20,27 @@
 
 #include "anatomy/character.h"
 #include "pipeline/influences.h"
+#include "pipeline/skin_place.h"
 #include "pipeline/skin_volume.h"
 
 namespace rigbake {
 
 // The place that takes the most of a region's volume under the rig against plain skinning at one
-// sample. `found` is false when no vertex takes any (the rig loses nothing there at first order).
+// sample. `at.found` is false when no vertex takes any (the rig loses nothing there at first order).
 struct RegionLossPlace {
-  bool found = false;
-  int mesh_part = -1;             // index into Character::meshes
-  std::string mesh;               // that part's mesh name, glTF mesh and primitive (where to look in the file)
-  int gltf_mesh = -1, gltf_primitive = -1;
-  int vertex = -1;                // the place's first vertex in that part
-  Eigen::Vector3d bind = Eigen::Vector3d::Zero();  // its bind position, scene units
-  double points = 0.0;            // -c_v of that place: points of the region's bind volume it takes (> 0)
+  SkinPlace at;
+  double points = 0.0;              // -c_v of that place: points of the region's bind volume it takes (> 0)
   double first_order_points = 0.0;  // sum of c_v over the region: the rig's change minus plain's, to first order
   double difference_points = 0.0;   // the same difference measured exactly (both closed pieces' volumes)
-  double time = 0.0;              // the sample, seconds into the clip
+  double time = 0.0;                // the sample, seconds into the clip
 };
 
 // One part's closed piece of a region: the part's welded surface, the piece over it, the part's
 // bind positions and both weight sets.
 struct RegionPiece {
-  int mesh_part = -1;
+  int mesh_part = -1;  // index into Character::meshes
   const VolumeSurface* surface = nullptr;
   const ClosedPatch* patch = nullptr;
-  const std::vector<Eigen::Vector3d>* bind_positions = nullptr;
   const InfluenceSet* input = nullptr;  // the input's weights (plain skinning)
   const InfluenceSet* rig = nullptr;    // the weights written
 };
@@ -57,10 +52,11 @@ struct RegionLossScratch {
   std::vector<int> needed;
 };
 
-// The place above for a region made of `pieces` (one per measured part) at one sample (`frame`, every
-// joint's skin matrix), with the region's bind volume summed over the parts.
-RegionLossPlace regionLossPlace(const std::vector<RegionPiece>& pieces, const std::vector<Eigen::Affine3d>& frame,
-                                double bind_volume, double time, RegionLossScratch* scratch);
+// The place above for a region made of `pieces` (one per measured part of `character`) at one sample
+// (`frame`, every joint's skin matrix), with the region's bind volume summed over the parts.
+RegionLossPlace regionLossPlace(const Character& character, const std::vector<RegionPiece>& pieces,
+                                const std::vector<Eigen::Affine3d>& frame, double bind_volume, double time,
+                                RegionLossScratch* scratch);
 
 // One phrase naming the place for bake's region line and validate's check, e.g. "2.85 points of it at
 // vertex 449 of mesh 'Cylinder.005' (glTF mesh 0, primitive 0; bind position -0.313 2.695 0.032)";

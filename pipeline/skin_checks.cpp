@@ -215,7 +215,8 @@ CheckResult checkRoughnessRise(const ValidationInputs& inputs, const ValidationC
       checkAt<checkIndex("SKIN_ROUGHNESS_RISE")>(), inputs, config,
       [](const ClipQuality& clip, CheckMeasurement* measurement) {
         measurement->add(roughnessRatio(clip.surface), clip.clip,
-                         "roughness rise (95th percentile) " + perSkinning(clip.surface.roughness_rise, 1000.0, 3, "mm"));
+                         "roughness rise (95th percentile) " + perSkinning(clip.surface.roughness_rise, 1000.0, 3, "mm") +
+                             (clip.surface.lumpiest.at.found ? "; " + lumpPlaceText(clip.surface.lumpiest) : std::string()));
       },
       [](int clips, double measured) {
         return std::to_string(clips) + " clips, the rig's roughness rise at most " + fixedDecimals(measured, 2) + " x the input skinning's";

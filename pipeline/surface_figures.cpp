@@ -148,6 +148,10 @@ std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> poseSkinnings(const 
 // rotation's body volume.
 struct SampleFigures {
   std::array<double, kSurfaceSkinnings> rise{};
+  // The moving vertex whose rise under the rig exceeds plain skinning's most (part, its vertex), and
+  // both rises there.
+  int lump_part = -1, lump_vertex = -1;
+  double lump_rig = 0.0, lump_input = 0.0;
   std::array<double, kSurfaceSkinnings> edge_strain{}, area_strain{};
   std::array<double, kSurfaceSkinnings> occupied{};
   double volume = 0.0;
@@ -186,10 +190,19 @@ SampleFigures measureSample(const Character& character, const std::vector<Measur
     const SurfacePart& part = surfaces[p];
     // Every vertex posed by each skinning: the occupied volume takes them all.
     const std::array<std::vector<Eigen::Vector3d>, kSurfaceSkinnings> posed = poseSkinnings(bind, parts[p], part, frame, rotations);
+    std::vector<double> plain;  // the input skinning's roughness per moving vertex
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       whole[s].push_back(weldedPositions(part.surface, posed[s]));
       const std::vector<double> r = roughness(part, whole[s].back());
       for (size_t i = 0; i < r.size(); ++i) rises[s].push_back(r[i] - part.bind_roughness[i]);
+      if (s == 0) plain = r;
+      for (size_t i = 0; s == kSurfaceSkinnings - 1 && i < r.size(); ++i) {
+        if (!(r[i] - plain[i] > figures.lump_rig - figures.lump_input)) continue;
+        figures.lump_part = static_cast<int>(p);
+        figures.lump_vertex = part.surface.vertex_of_weld[static_cast<size_t>(part.moving[i])];
+        figures.lump_rig = r[i] - part.bind_roughness[i];
+        figures.lump_input = plain[i] - part.bind_roughness[i];
+      }
       appendStrains(part, whole[s].back(), &edge_strains[s], &area_strains[s]);
       if (s == 2) figures.volume += enclosedVolume(part.surface.whole, whole[s].back());
     }
@@ -309,10 +322,19 @@ void measureSurfaceFigures(const Character& character, const std::vector<Measure
   parallelForEach(threads, samples.size(), [&](size_t i) {
     figures[i] = measureSample(character, parts, surfaces, grid, (*clips[samples[i].first].frames)[samples[i].second]);
   });
+  std::vector<double> roughest(clips.size(), -1.0);  // per clip, the rig's largest rise so far
   for (size_t i = 0; i < samples.size(); ++i) {
     const auto [c, t] = samples[i];
     SurfaceFigures& surface = quality->clips[c].surface;
     surface.measured = true;
+    if (figures[i].rise[kSurfaceSkinnings - 1] > roughest[c]) {
+      roughest[c] = figures[i].rise[kSurfaceSkinnings - 1];
+      const SampleFigures& sample = figures[i];
+      surface.lumpiest = LumpPlace{};
+      if (sample.lump_part >= 0)
+        surface.lumpiest = {skinPlace(character, parts[static_cast<size_t>(sample.lump_part)].mesh_part, sample.lump_vertex),
+                            sample.lump_rig, sample.lump_input, clips[c].times[t]};
+    }
     surface.roughness_floor = kRoughnessFloorPerHeight * height;
     for (int s = 0; s < kSurfaceSkinnings; ++s) {
       surface.roughness_rise[s] = std::max(surface.roughness_rise[s], figures[i].rise[s]);

@@ -345,6 +345,13 @@ TEST_CASE("validate: deformation figures, checks and pictures from the baked fil
     CHECK(check["findings"].size() == 3);
   }
   CHECK(status.count("SKIN_STRAIN") == 1);
+  // SKIN_ROUGHNESS_RISE's findings say where each clip's skin is lumpiest against plain skinning.
+  for (const auto& check : report["checks"]) {
+    if (check["code"] != "SKIN_ROUGHNESS_RISE") continue;
+    REQUIRE(check["findings"].size() == 3);
+    for (const auto& finding : check["findings"])
+      CHECK(finding["message"].get<std::string>().find("; lumpiest at vertex ") != std::string::npos);
+  }
   // report.html puts the four skinnings' surface figures side by side, per clip, and marks the elbow's
   // area strain (the rig's 29 % against plain skinning's 22 %).
   CHECK(html.find("<th>plain</th><th>dual quaternions</th><th>centres of rotation</th><th>rig</th>") != std::string::npos);

@@ -45,12 +45,13 @@ InfluenceSet oneJointEach(size_t count, const std::vector<int>& moved) {
 }
 
 struct Scene {
+  Character character;  // its one mesh part
   MeshPart mesh;
   VolumeSurface surface;
   ClosedPatch patch;
   InfluenceSet plain, rig;
   double bind_volume = 0.0;
-  RegionPiece piece() const { return RegionPiece{0, &surface, &patch, &mesh.positions, &plain, &rig}; }
+  RegionPiece piece() const { return RegionPiece{0, &surface, &patch, &plain, &rig}; }
 };
 
 }  // namespace
@@ -58,6 +59,8 @@ struct Scene {
 TEST_CASE("region loss place: the vertex the rig pulls in is named, with its share of the volume the region loses") {
   Scene scene;
   scene.mesh = sphere(12, 16);
+  scene.mesh.name = "ball";
+  scene.character.meshes = {scene.mesh};
   scene.surface = buildVolumeSurface(scene.mesh, 1e-9);
   scene.patch = scene.surface.whole;
   scene.bind_volume = enclosedVolume(scene.patch, scene.surface.bind);
@@ -68,12 +71,14 @@ TEST_CASE("region loss place: the vertex the rig pulls in is named, with its sha
   const Eigen::Vector3d in = -0.05 * scene.mesh.positions[static_cast<size_t>(moved)];
   std::vector<Eigen::Affine3d> frame = {Eigen::Affine3d::Identity(), Eigen::Affine3d(Eigen::Translation3d(in))};
   RegionLossScratch scratch;
-  const RegionLossPlace place = regionLossPlace({scene.piece()}, frame, scene.bind_volume, 0.5, &scratch);
-  REQUIRE(place.found);
-  CHECK(place.vertex == moved);
-  CHECK(place.mesh_part == 0);
+  const RegionLossPlace place = regionLossPlace(scene.character, {scene.piece()}, frame, scene.bind_volume, 0.5, &scratch);
+  REQUIRE(place.at.found);
+  CHECK(place.at.vertex == moved);
+  CHECK(place.at.mesh_part == 0);
+  CHECK(place.at.mesh == "ball");
   CHECK(place.time == 0.5);
-  CHECK((place.bind - scene.mesh.positions[static_cast<size_t>(moved)]).norm() == 0.0);
+  CHECK((place.at.bind - scene.mesh.positions[static_cast<size_t>(moved)]).norm() == 0.0);
+  CHECK(regionLossPlaceText(place).find(" points of it at vertex " + std::to_string(moved) + " of mesh 'ball'") != std::string::npos);
   // The exact difference, from the two posed surfaces' volumes.
   std::vector<Eigen::Vector3d> posed = scene.surface.bind;
   posed[static_cast<size_t>(scene.surface.weld_of_vertex[static_cast<size_t>(moved)])] += in;
@@ -88,8 +93,9 @@ TEST_CASE("region loss place: the vertex the rig pulls in is named, with its sha
 
   // Pushed out instead, nothing is taken: no place.
   frame[1] = Eigen::Affine3d(Eigen::Translation3d(-in));
-  const RegionLossPlace out = regionLossPlace({scene.piece()}, frame, scene.bind_volume, 0.5, &scratch);
-  CHECK_FALSE(out.found);
+  const RegionLossPlace out = regionLossPlace(scene.character, {scene.piece()}, frame, scene.bind_volume, 0.5, &scratch);
+  CHECK_FALSE(out.at.found);
+  CHECK(regionLossPlaceText(out).empty());
   CHECK(out.difference_points > 0.05);
 }
 
@@ -97,6 +103,7 @@ TEST_CASE("region loss place: on a capped piece the border's moves count through
   // The upper half of the sphere, closed by the cap over its equator: a region cut out of a body.
   Scene scene;
   scene.mesh = sphere(12, 16);
+  scene.character.meshes = {scene.mesh};
   scene.surface = buildVolumeSurface(scene.mesh, 1e-9);
   std::vector<int> upper;
   for (size_t t = 0; t < scene.surface.whole.triangles.size(); ++t) {
@@ -124,10 +131,10 @@ TEST_CASE("region loss place: on a capped piece the border's moves count through
   const std::vector<Eigen::Affine3d> frame = {Eigen::Affine3d::Identity(), Eigen::Affine3d(Eigen::Translation3d(0.0, 0.05, 0.0)),
                                               Eigen::Affine3d(Eigen::Translation3d(0.0, 0.01, 0.0))};
   RegionLossScratch scratch;
-  const RegionLossPlace place = regionLossPlace({scene.piece()}, frame, scene.bind_volume, 0.0, &scratch);
-  REQUIRE(place.found);
-  CHECK(place.vertex >= equator + 2);
-  CHECK(place.vertex <= equator + 4);
+  const RegionLossPlace place = regionLossPlace(scene.character, {scene.piece()}, frame, scene.bind_volume, 0.0, &scratch);
+  REQUIRE(place.at.found);
+  CHECK(place.at.vertex >= equator + 2);
+  CHECK(place.at.vertex <= equator + 4);
   CHECK(place.difference_points < -1.0);
   // Several vertices move: the first-order sum is the difference to a small fraction of it.
   CHECK(place.first_order_points == Approx(place.difference_points).epsilon(0.01));
