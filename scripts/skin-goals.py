@@ -6,6 +6,8 @@
   creases:   crease samples (clip x crease) where no more vertices pass through the opposing skin under the
              rig than under plain skinning and it comes no more than 0.5 mm closer;
   regions:   characters on which no body region loses more than 1 point of volume beyond plain skinning.
+Below the table, where to look: each character's roughest clip's lumpiest vertex and its worst region's
+place (the vertex taking most of its loss), as the stats name them (docs/deformation-quality.md).
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
 import os
@@ -37,6 +39,8 @@ def score(out):
                   if abs(quality["body"]["per_clip"][c]["rig"]["change_percent"])
                   <= 0.5 * abs(quality["body"]["per_clip"][c]["input"]["change_percent"])]
         row["halved"] = [len(halved), len(arm)]
+        roughest_clip = max(quality["surface"]["per_clip"], key=lambda c: quality["surface"]["per_clip"][c]["roughness_ratio"])
+        row["lumpiest"] = quality["surface"]["per_clip"][roughest_clip].get("lumpiest_at")
         samples = [(c, k, v) for c, per in quality["creases"]["per_clip"].items() for k, v in per.items()]
         row["creases"] = [sum(crease_no_worse(v["rig"], v["input"]) for _, _, v in samples), len(samples)]
         worst = (0.0, None, None)
@@ -45,7 +49,9 @@ def score(out):
                 loss = max(0.0, min(v["input"]["change_percent"], 0.0) - v["rig"]["change_percent"])
                 if loss > worst[0]:
                     worst = (loss, region, clip)
-        row["worst_region"] = {"points": worst[0], "region": worst[1], "clip": worst[2]}
+        row["worst_region"] = {"points": worst[0], "region": worst[1], "clip": worst[2],
+                               "place": quality["regions"][worst[1]]["per_clip"][worst[2]]["rig"].get("lost_most_at")
+                               if worst[1] else None}
         row["regions"] = [1 if worst[0] <= 1.0 else 0, 1]
         rows.append(row)
         for key in totals:
@@ -69,6 +75,17 @@ def main():
             r["character"], *r["roughness"], r["roughest"], *r["halved"], *r["creases"], w["points"], w["region"] or "", w["clip"] or ""))
     print("%-14s %6d/%-3d %9s %4d/%-3d %5d/%-3d  %d/%d characters within 1 point" % (
         "total", *totals["roughness"], "", *totals["halved"], *totals["creases"], *totals["regions"]))
+    print("\nwhere to look (mesh 'name' vertex, bind position):")
+    for r in rows:
+        lump, place = r["lumpiest"], r["worst_region"]["place"]
+        if lump:
+            print("%-14s lumpiest: %s vertex %d at (%.3f %.3f %.3f), %.2f mm beyond plain skinning" % (
+                r["character"], repr(lump["mesh"]), lump["vertex"], *lump["bind_position"],
+                lump["rig_rise_mm"] - lump["input_rise_mm"]))
+        if place:
+            print("%-14s region:   %s vertex %d at (%.3f %.3f %.3f), %.2f of its %.2f points" % (
+                r["character"], repr(place["mesh"]), place["vertex"], *place["bind_position"], place["points"],
+                r["worst_region"]["points"]))
 
 
 if __name__ == "__main__":
