@@ -383,8 +383,10 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "Write figures (deformation error, volume against plain and dual-quaternion skinning per clip and "
                       "body region, bytes per vertex, and the skin's: seams, roughness, strain, occupied volume, creases and "
                       "joint regions against plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for "
-                      "standard output. The skin's figures cost more than the rest of the bake: a bake without --stats "
-                      "or --json skips them");
+                      "standard output. Where a figure fails it names the vertex to look at: the one taking most of a "
+                      "region's lost volume (lost_most_at) and where the skin is lumpiest (lumpiest_at), by mesh, "
+                      "vertex and bind position. The skin's figures cost more than the rest of the bake: a bake without "
+                      "--stats or --json skips them");
   command->add_option("--response", options->response,
                       "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "
                       "have their preset's curves, keep curves a muscle file brings; fit = fit every part; keep = fit "
