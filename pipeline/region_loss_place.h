@@ -35,8 +35,8 @@ struct RegionLossPlace {
   double time = 0.0;                // the sample, seconds into the clip
 };
 
-// One part's closed piece of a region: the part's welded surface, the piece over it, the part's
-// bind positions and both weight sets.
+// One part's closed piece of a region: the part's welded surface, the piece over it and both weight
+// sets (the bind positions are the part's own, Character::meshes[mesh_part]).
 struct RegionPiece {
   int mesh_part = -1;  // index into Character::meshes
   const VolumeSurface* surface = nullptr;

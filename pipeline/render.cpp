@@ -10,6 +10,30 @@
 
 namespace rigbake {
 
+namespace {
+
+// The orthographic camera's view axes and scale for a width x height image: renderSurfaces() draws with
+// it and drawRing() marks a point where that drawing put it.
+struct Projection {
+  Projection(const Camera& camera, int width, int height)
+      : centre(camera.centre),
+        forward(camera.forward.normalized()),
+        up((camera.up - camera.up.dot(forward) * forward).normalized()),
+        right(forward.cross(up)),
+        pixels_per_unit(0.5 * height / camera.half_height),
+        half_width(0.5 * width),
+        half_height(0.5 * height) {}
+  // Pixel column, row (from the top) and depth along `forward`.
+  Eigen::Vector3d screen(const Eigen::Vector3d& p) const {
+    const Eigen::Vector3d d = p - centre;
+    return {half_width + d.dot(right) * pixels_per_unit, half_height - d.dot(up) * pixels_per_unit, d.dot(forward)};
+  }
+  Eigen::Vector3d centre, forward, up, right;
+  double pixels_per_unit, half_width, half_height;
+};
+
+}  // namespace
+
 Eigen::Vector3f divergingColour(double value) {
   const double t = std::clamp(value, -1.0, 1.0);
   const Eigen::Vector3d cool(0.230, 0.299, 0.754), white(0.95, 0.95, 0.95), warm(0.706, 0.016, 0.150);
@@ -18,13 +42,8 @@ Eigen::Vector3f divergingColour(double value) {
 }
 
 void drawRing(const Camera& camera, const Eigen::Vector3d& point, RgbImage* image) {
-  // The projection renderSurfaces() takes.
-  const Eigen::Vector3d forward = camera.forward.normalized();
-  const Eigen::Vector3d up = (camera.up - camera.up.dot(forward) * forward).normalized();
-  const Eigen::Vector3d right = forward.cross(up);
-  const double pixels_per_unit = 0.5 * image->height / camera.half_height;
-  const Eigen::Vector3d d = point - camera.centre;
-  const double x = 0.5 * image->width + d.dot(right) * pixels_per_unit, y = 0.5 * image->height - d.dot(up) * pixels_per_unit;
+  const Eigen::Vector3d at = Projection(camera, image->width, image->height).screen(point);
+  const double x = at.x(), y = at.y();
   constexpr double kRadius = 6.0, kHalfLine = 1.0;
   for (int row = static_cast<int>(std::floor(y - kRadius - kHalfLine)); row <= static_cast<int>(std::ceil(y + kRadius + kHalfLine)); ++row) {
     for (int column = static_cast<int>(std::floor(x - kRadius - kHalfLine)); column <= static_cast<int>(std::ceil(x + kRadius + kHalfLine));
@@ -32,8 +51,8 @@ void drawRing(const Camera& camera, const Eigen::Vector3d& point, RgbImage* imag
       if (row < 0 || row >= image->height || column < 0 || column >= image->width) continue;
       const double distance = std::hypot(column + 0.5 - x, row + 0.5 - y);
       if (std::abs(distance - kRadius) > kHalfLine) continue;
-      const size_t at = (static_cast<size_t>(row) * image->width + column) * 3;
-      image->pixels[at] = image->pixels[at + 1] = image->pixels[at + 2] = 0;
+      const size_t offset = (static_cast<size_t>(row) * image->width + column) * 3;
+      image->pixels[offset] = image->pixels[offset + 1] = image->pixels[offset + 2] = 0;
     }
   }
 }
@@ -44,10 +63,8 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
   image.height = height;
   image.pixels.assign(static_cast<size_t>(width) * height * 3, 255);
   std::vector<double> depth(static_cast<size_t>(width) * height, std::numeric_limits<double>::infinity());
-  const Eigen::Vector3d forward = camera.forward.normalized();
-  const Eigen::Vector3d up = (camera.up - camera.up.dot(forward) * forward).normalized();
-  const Eigen::Vector3d right = forward.cross(up);
-  const double pixels_per_unit = 0.5 * height / camera.half_height;
+  const Projection projection(camera, width, height);
+  const Eigen::Vector3d &forward = projection.forward, &up = projection.up, &right = projection.right;
   // Light from the viewer's upper left, a little in front.
   const Eigen::Vector3d light = (-forward + 0.5 * up - 0.4 * right).normalized();
 
@@ -66,10 +83,7 @@ RgbImage renderSurfaces(const std::vector<RenderSurface>& surfaces, const Camera
     const std::vector<Eigen::Vector3d>& positions = *surface.positions;
     // Screen coordinates, and area-weighted vertex normals for smooth shading.
     std::vector<Eigen::Vector3d> screen(positions.size());
-    for (size_t v = 0; v < positions.size(); ++v) {
-      const Eigen::Vector3d d = positions[v] - camera.centre;
-      screen[v] = {0.5 * width + d.dot(right) * pixels_per_unit, 0.5 * height - d.dot(up) * pixels_per_unit, d.dot(forward)};
-    }
+    for (size_t v = 0; v < positions.size(); ++v) screen[v] = projection.screen(positions[v]);
     std::vector<Eigen::Vector3d>& normals = surface_normals[s];
     normals.assign(positions.size(), Eigen::Vector3d::Zero());
     for (const auto& t : *surface.triangles) {
