@@ -6,7 +6,9 @@
   creases:   crease samples (clip x crease) where no more vertices pass through the opposing skin under the
              rig than under plain skinning and it comes no more than 0.5 mm closer;
   regions:   characters on which no body region loses more than 1 point of volume beyond plain skinning.
-Below the table, where to look: each character's roughest clip's lumpiest vertex and its worst region's
+Beneath, the same counts for the yardsticks the issue names, dual quaternions and centres of rotation, each
+scored against plain skinning as the rig is (regions: dual quaternions only; the stats carry no
+centre-of-rotation region volumes). Below that, where to look: each character's roughest clip's lumpiest vertex and its worst region's
 place (the vertex taking most of its loss), as the stats name them (docs/deformation-quality.md).
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
@@ -23,6 +25,44 @@ def crease_no_worse(rig, plain):
     if plain["closest_mm"] is None or rig["closest_mm"] is None:
         return True  # no skin faces skin within reach under one of them: nothing closer
     return rig["closest_mm"] >= plain["closest_mm"] - 0.5
+
+
+METHODS = {"dual quat.": "dual_quaternion", "centres rot.": "centre_of_rotation"}
+
+
+def method_change(quality, clip, key):
+    """Whole-body change (percent) of skinning `key` in `clip`: the body table's, or for centres of rotation
+    the surface figures' (the body table has no such column)."""
+    if key == "centre_of_rotation":
+        return quality["surface"]["per_clip"][clip]["centre_of_rotation_volume"]["change_percent"]
+    return quality["body"]["per_clip"][clip][key]["change_percent"]
+
+
+def score_method(out, key):
+    """The four counts for a comparison skinning, judged as the rig is: its roughness rise against plain
+    skinning's (floored), its arm clips' change against plain skinning's, its crease samples against plain
+    skinning's, its regions' loss beyond plain skinning (None where the stats have no regions for it)."""
+    totals = {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0], "regions": [0, 0] if key == "dual_quaternion" else None}
+    for name in NAMES:
+        quality = json.load(open(os.path.join(out, name + ".stats.json")))["deformation_quality"]
+        for clip, figures in quality["surface"]["per_clip"].items():
+            rise = figures["roughness_rise_p95_mm"]
+            totals["roughness"][0] += rise[key] <= 1.2 * max(rise["input"], figures["roughness_floor_mm"])
+            totals["roughness"][1] += 1
+            if clip in ARM_CLIPS:
+                plain = quality["body"]["per_clip"][clip]["input"]["change_percent"]
+                totals["halved"][0] += abs(method_change(quality, clip, key)) <= 0.5 * abs(plain)
+                totals["halved"][1] += 1
+        for per in quality["creases"]["per_clip"].values():
+            for v in per.values():
+                totals["creases"][0] += crease_no_worse(v[key], v["input"])
+                totals["creases"][1] += 1
+        if totals["regions"] is not None:
+            worst = max([max(0.0, min(v["input"]["change_percent"], 0.0) - v[key]["change_percent"])
+                         for data in quality["regions"].values() for v in data["per_clip"].values()] + [0.0])
+            totals["regions"][0] += worst <= 1.0
+            totals["regions"][1] += 1
+    return totals
 
 
 def score(out):
@@ -64,8 +104,9 @@ def main():
     if len(sys.argv) < 2:
         sys.exit(__doc__)
     rows, totals = score(sys.argv[1])
+    methods = {name: score_method(sys.argv[1], key) for name, key in METHODS.items()}
     if "--json" in sys.argv:
-        print(json.dumps({"characters": rows, "totals": totals}, indent=2))
+        print(json.dumps({"characters": rows, "totals": totals, "yardsticks": methods}, indent=2))
         return
     print("%-14s %10s %9s %8s %9s  %s" % ("character", "roughness", "roughest", "halved", "creases",
                                           "worst region loss beyond plain (points)"))
@@ -75,6 +116,10 @@ def main():
             r["character"], *r["roughness"], r["roughest"], *r["halved"], *r["creases"], w["points"], w["region"] or "", w["clip"] or ""))
     print("%-14s %6d/%-3d %9s %4d/%-3d %5d/%-3d  %d/%d characters within 1 point" % (
         "total", *totals["roughness"], "", *totals["halved"], *totals["creases"], *totals["regions"]))
+    print("the yardsticks, each scored against plain skinning as the rig is:")
+    for name, t in methods.items():
+        regions = "%d/%d characters within 1 point" % tuple(t["regions"]) if t["regions"] else "(no region figures)"
+        print("%-14s %6d/%-3d %9s %4d/%-3d %5d/%-3d  %s" % (name, *t["roughness"], "", *t["halved"], *t["creases"], regions))
     print("\nwhere to look (mesh 'name' vertex, bind position):")
     for r in rows:
         lump, place = r["lumpiest"], r["worst_region"]["place"]
