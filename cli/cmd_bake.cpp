@@ -361,7 +361,7 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "Influences per vertex: 4, 7 or 10. Where a vertex has "
                       "more, the bake keeps the joints and weights that best follow all of them over the clips' "
                       "frames: on the eight shared characters at 4, the largest deformation error against all of "
-                      "them is 1.6-73 mm (RMS 0.02-2 mm) instead of 12-310 mm keeping the strongest "
+                      "them is 1.3-73 mm (RMS 0.02-2 mm) instead of 12-310 mm keeping the strongest "
                       "(docs/muscle-weights.md, \"Refitting the kept weights\")")
       ->check(CLI::IsMember({4, 7, 10}))
       ->capture_default_str();
@@ -413,8 +413,8 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "95th percentile within this many times plain skinning's roughness rise (issue 29's goal is "
                       "1.2); the muscles then keep what volume they can within it. 0: no bound. Measured on eight "
                       "characters at 1.2 and 10 influences: every clip within 1.2x plain skinning's roughness (without "
-                      "the cap 78 of 128), but the rig's volume change is 0.94 of plain skinning's on the median clip "
-                      "instead of 0.66, and 1 of 20 arm clips keeps half of it instead of 7 (scripts/skin-goals.sh; "
+                      "the cap 83 of 128), but the rig's volume change is 0.94 of plain skinning's on the median clip "
+                      "instead of 0.76, and 1 of 20 arm clips keeps half of it instead of 7 (scripts/skin-goals.sh; "
                       "docs/deformation-quality.md, \"The roughness cap\")")
       ->check(CLI::Range(0.0, 100.0))
       ->capture_default_str();
@@ -422,9 +422,9 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "Which volume the response fit keeps: signed = the enclosed volume, where skin pushed into a fold "
                       "counts twice; occupied = skin inside other skin at a fitted pose earns nothing, so the muscles do "
                       "not swell into folds. Use it with --fit-smoothness (alone it is not stable): at 200 on Quaternius "
-                      "Cyberpunk (10 influences) it halves plain skinning's occupied-volume change on 11 of 22 clips "
-                      "instead of 8 at the same roughness, 2.35x against 2.34x (at 300, 6 against 7: "
-                      "docs/deformation-quality.md, \"The fit on the occupied volume\")")
+                      "Cyberpunk (10 influences) it is smoother than the signed fit, 1.29x plain skinning's roughness "
+                      "against 1.44x, and halves plain skinning's occupied-volume change on as many clips, 1 of 22 "
+                      "(docs/deformation-quality.md, \"The fit on the occupied volume\")")
       ->check(CLI::IsMember({"signed", "occupied"}))
       ->capture_default_str();
   command->add_option("--muscle-motion", options->muscle_motion,

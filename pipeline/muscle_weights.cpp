@@ -36,6 +36,10 @@ double sideFactor(double facing, const MuscleWeightOptions& options) {
   return x * x * (3.0 - 2.0 * x);
 }
 
+// How far from all of a vertex's weight its strongest joint may be and still hold it alone: the 0.001
+// rounding of stored weights.
+constexpr double kRigidWeightTolerance = 1e-3;
+
 double falloff(double distance, double radius) {
   if (radius <= 0 || distance >= radius) return 0.0;
   double x = distance / radius;
@@ -146,6 +150,56 @@ std::vector<double> muscleWeightRadii(const Character& character, const MuscleSe
   return radii;
 }
 
+std::vector<char> rigidPieces(const MeshPart& part, const SurfaceGraph& surface) {
+  const int welded_count = surface.weldedCount();
+  const int slots = part.influences_per_vertex;
+  // The one joint holding each welded vertex alone, -1 where none does (-2: not seen yet).
+  std::vector<int> sole(welded_count, -2);
+  for (size_t v = 0; v < part.positions.size(); ++v) {
+    double total = 0.0, largest = 0.0;
+    int joint = -1;
+    for (int k = 0; k < slots; ++k) {
+      const double weight = part.weights[v * slots + k];
+      total += weight;
+      if (weight > largest) {
+        largest = weight;
+        joint = part.joints[v * slots + k];
+      }
+    }
+    const int holder = total > 0.0 && largest >= (1.0 - kRigidWeightTolerance) * total ? joint : -1;
+    int& welded = sole[surface.weld_of_vertex[v]];
+    welded = welded == -2 || welded == holder ? holder : -1;
+  }
+  // Pieces: connected components of the welded graph, each flooded once.
+  std::vector<char> rigid(welded_count, 0);
+  std::vector<char> seen(welded_count, 0);
+  std::vector<int> stack, members;
+  for (int start = 0; start < welded_count; ++start) {
+    if (seen[start]) continue;
+    members.clear();
+    stack.assign(1, start);
+    seen[start] = 1;
+    bool is_rigid = sole[start] >= 0;
+    while (!stack.empty()) {
+      const int w = stack.back();
+      stack.pop_back();
+      members.push_back(w);
+      is_rigid = is_rigid && sole[w] == sole[start];
+      for (std::uint32_t k = surface.first_neighbour[w]; k < surface.first_neighbour[w + 1]; ++k) {
+        const int u = surface.neighbours[k];
+        if (!seen[u]) {
+          seen[u] = 1;
+          stack.push_back(u);
+        }
+      }
+    }
+    if (is_rigid)
+      for (int w : members) rigid[w] = 1;
+  }
+  return rigid;
+}
+
+
 std::vector<int> spannedJoints(const std::vector<int>& parents, const MusclePart& part) {
   std::vector<int> up_from_origin, up_from_insertion;
   for (int j = part.origin.joint; j >= 0; j = parents[j]) up_from_origin.push_back(j);
@@ -172,6 +226,8 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
   std::vector<Eigen::Vector3d> welded_position(welded_count);
   for (int v = static_cast<int>(part.positions.size()) - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
   const size_t muscle_count = muscles.parts.size();
+  const std::vector<char> rigid =
+      options.rigid_pieces_stay_rigid ? rigidPieces(part, surface) : std::vector<char>(static_cast<size_t>(welded_count), 0);
   // Each muscle's shares above 0, welded vertices ascending.
   std::vector<std::vector<std::pair<int, double>>> per_muscle(muscle_count);
   std::vector<ShareScratch> scratch(std::max<size_t>(1, parallelWorkerCount(threads, muscle_count, 1)));
@@ -198,6 +254,7 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
     const Eigen::Vector3d high = muscle.origin.world.cwiseMax(muscle.insertion.world).array() + reach;
     work.active.clear();
     for (int w = 0; w < welded_count; ++w) {
+      if (rigid[w]) continue;
       const Eigen::Vector3d& p = welded_position[w];
       if ((p.array() < low.array()).any() || (p.array() > high.array()).any()) continue;
       const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);

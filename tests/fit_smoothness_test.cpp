@@ -83,9 +83,10 @@ TEST_CASE("fit smoothness: on Male_Casual (FBX) weight 1000 keeps the rig within
 }
 
 // The fit on the occupied volume (bake --fit-volume occupied): on Quaternius Cyberpunk, whose rig swells
-// into its folds most, with the smoothness term at 200 (Cyberpunk is 1.40 m tall: 257 per metre) it keeps more of the space the body occupies and
-// is no rougher (docs/deformation-quality.md, "The fit on the occupied volume").
-TEST_CASE("fit volume: on Cyberpunk the occupied fit keeps more occupied volume and is no rougher, with smoothness 200") {
+// into its folds most, with the smoothness term at 200 (Cyberpunk is 1.40 m tall: 257 per metre) it keeps
+// as much of the space the body occupies and is smoother (docs/deformation-quality.md, "The fit on the
+// occupied volume").
+TEST_CASE("fit volume: on Cyberpunk the occupied fit keeps as much occupied volume and is smoother, with smoothness 200") {
   const std::string path = rigbake::test::requireAsset("Quaternius_Cyberpunk_Character.glb");
   if (path.empty()) return;
   rigbake::test::TempDir dir;
@@ -105,10 +106,11 @@ TEST_CASE("fit volume: on Cyberpunk the occupied fit keeps more occupied volume 
                                     << occupied_fit.clips << " clips; roughness x plain, largest " << signed_fit.roughest << " -> "
                                     << occupied_fit.roughest);
   REQUIRE(occupied_fit.clips == 22);
-  // Measured: 8 -> 11 of 22, 2.34 -> 2.35 (8 -> 16, 2.39 -> 2.14 before a compression key's bound fell
-  // towards rest with the talk's amplitude: docs/muscle-model.md).
-  CHECK(occupied_fit.occupied_halved >= signed_fit.occupied_halved + 3);
-  CHECK(occupied_fit.roughest < 1.01 * signed_fit.roughest);
+  // Measured: 1 -> 1 of 22, 1.44 -> 1.29. (8 -> 11, 2.34 -> 2.35 while muscles still took weight on
+  // Cyberpunk's armour plates, which the input moves rigidly: the clips halved were the plates swelling;
+  // 8 -> 16, 2.39 -> 2.14 before a compression key's bound fell towards rest with the talk's amplitude.)
+  CHECK(occupied_fit.occupied_halved >= signed_fit.occupied_halved);
+  CHECK(occupied_fit.roughest < 0.95 * signed_fit.roughest);
   CHECK(occupied_fit.closer_than_plain == occupied_fit.clips);
   bake("occupied_alone", "--fit-volume occupied");
   // Each pose's exposure is its own: one thread gives the same file as two.
@@ -141,13 +143,13 @@ TEST_CASE("fit roughness cap: at 1.2 every Cyberpunk clip is within 1.2x plain s
                                                  << "volume than plain skinning " << volume_only.closer_than_plain << " -> "
                                                  << capped.closer_than_plain << " of " << capped.clips);
   REQUIRE(capped.clips == 22);
-  // Measured: 2.86 -> 1.03; 22 -> 22 of 22.
+  // Measured: 2.36 -> 1.02; 22 -> 22 of 22.
   CHECK(volume_only.roughest > 2.0);
   CHECK(capped.roughest <= 1.2);
   CHECK(capped.closer_than_plain >= 20);
   CHECK(capped.worst_region <= 1.0);
   // The bake names the cap where the rig is over the check, and not once the cap holds it.
-  CHECK(said["volume"].find("on 22 of 22 clips (SKIN_ROUGHNESS_RISE): --fit-roughness-cap 1.20 bounds it") != std::string::npos);
+  CHECK(said["volume"].find("on 20 of 22 clips (SKIN_ROUGHNESS_RISE): --fit-roughness-cap 1.20 bounds it") != std::string::npos);
   CHECK(said["capped"].find("--fit-roughness-cap") == std::string::npos);
   // The cap's bound per pose and its hinges are taken in pose order: one thread gives the same file as two.
   bake(cyberpunk, "capped_one_thread", "--fit-roughness-cap 1.2 --threads 1");

@@ -3,6 +3,7 @@
 // every vertex's sum, and the property the design rests on: a muscle joint that moves as its carrier
 // moves the skin exactly as the input skinning does.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -139,4 +140,56 @@ TEST_CASE("muscle weights: the muscles' weights keep every vertex's sum, and a m
     CHECK(worst <= 1e-9 * w.muscles.body_height);
   }
   CHECK(muscle_weight > 1.0);  // the muscles did take weight (summed over vertices)
+}
+
+namespace {
+
+// Two unit cubes of 8 corners each: the first held by joint 0 alone, the second by joints 0 and 1.
+MeshPart twoCubes(double second_cube_weight_on_0) {
+  MeshPart part;
+  part.skinned = true;
+  part.influences_per_vertex = 2;
+  const std::array<std::array<int, 3>, 12> faces = {{{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                                                     {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}}};
+  for (int cube = 0; cube < 2; ++cube) {
+    for (int corner = 0; corner < 8; ++corner) {
+      part.positions.emplace_back(2.0 * cube + (corner & 1), (corner >> 1) & 1, (corner >> 2) & 1);
+      const double on_0 = cube == 0 ? 1.0 : second_cube_weight_on_0;
+      part.joints.insert(part.joints.end(), {0, 1});
+      part.weights.insert(part.weights.end(), {on_0, 1.0 - on_0});
+    }
+    for (const auto& face : faces) part.triangles.push_back({face[0] + 8 * cube, face[1] + 8 * cube, face[2] + 8 * cube});
+  }
+  return part;
+}
+
+}  // namespace
+
+TEST_CASE("muscle weights: a piece the input moves rigidly is found whole, and a piece welded to blended skin is not rigid",
+          "[muscle-weights]") {
+  // One joint alone on every vertex of the first cube (0.0005 of the weight elsewhere is the 0.001
+  // rounding's, still alone); the second cube blends two joints.
+  MeshPart part = twoCubes(0.6);
+  part.weights[0] = 0.9995;
+  part.weights[1] = 0.0005;
+  std::vector<char> rigid = rigidPieces(part, buildSurfaceGraph(part, 1e-6));
+  REQUIRE(rigid.size() == 16);
+  CHECK(std::count(rigid.begin(), rigid.begin() + 8, 1) == 8);
+  CHECK(std::count(rigid.begin() + 8, rigid.end(), 1) == 0);
+  auto rigidCount = [](const MeshPart& mesh) {
+    const std::vector<char> flags = rigidPieces(mesh, buildSurfaceGraph(mesh, 1e-6));
+    return std::count(flags.begin(), flags.end(), 1);
+  };
+  // Both cubes held by joint 0 alone: both rigid. The second by joint 1 alone: each is rigid on its own.
+  CHECK(rigidCount(twoCubes(1.0)) == 16);
+  CHECK(rigidCount(twoCubes(0.0)) == 16);
+  // Moved onto the first cube's face, the second cube welds to it: one piece, blended, not rigid.
+  MeshPart touching = twoCubes(0.6);
+  for (int corner = 8; corner < 16; ++corner) touching.positions[corner].x() -= 1.0;
+  CHECK(rigidCount(touching) == 0);
+  // Vertex 0's row with 0.002 on joint 1 is not one joint's alone: the first cube is not rigid.
+  MeshPart loose = twoCubes(0.6);
+  loose.weights[0] = 0.998;
+  loose.weights[1] = 0.002;
+  CHECK(rigidCount(loose) == 0);
 }
