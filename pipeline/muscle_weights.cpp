@@ -167,6 +167,7 @@ std::vector<char> rigidPieces(const MeshPart& part, const SurfaceGraph& surface)
       }
     }
     const int holder = total > 0.0 && largest >= (1.0 - kRigidWeightTolerance) * total ? joint : -1;
+    // Split copies of a welded vertex (UV seams) must agree on their holder.
     int& welded = sole[surface.weld_of_vertex[v]];
     welded = welded == -2 || welded == holder ? holder : -1;
   }
@@ -198,7 +199,6 @@ std::vector<char> rigidPieces(const MeshPart& part, const SurfaceGraph& surface)
   }
   return rigid;
 }
-
 
 std::vector<int> spannedJoints(const std::vector<int>& parents, const MusclePart& part) {
   std::vector<int> up_from_origin, up_from_insertion;
