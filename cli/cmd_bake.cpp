@@ -242,6 +242,11 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
                    "written weights)";
     std::cerr << "\n";
   }
+  if (bake.rigid_piece_vertices > 0) {
+    std::cerr << "rigid pieces: " << bake.rigid_piece_vertices << " of the " << bake.vertex_count
+              << " skinned vertices are on pieces one joint moves alone (armour, props, hair): no muscle takes weight "
+                 "there, they move as the input's skinning moves them (docs/muscle-weights.md, \"Rigid pieces\")\n";
+  }
   if (legs.legs && !legs.covered && legs.largest_turn_deg > kLegTurnWorthMuscles) {
     std::cerr << std::setprecision(0) << "note: " << (options.muscles.empty() ? "preset '" + options.preset + "'" : options.muscles)
               << " has no muscle across the hips or knees, and clip '" << legs.clip << "' turns " << legs.joint << " by "

@@ -72,6 +72,7 @@ std::string bakeStatsJson(const BakeStatsInputs& in) {
       {"muscle_joints", bake.muscles.parts.size()},
       {"joints_added", jointsAdded(bake)},
       {"vertices", bake.vertex_count},
+      {"rigid_piece_vertices", bake.rigid_piece_vertices},
       {"clips", bake.clips.size()},
       {"deformation_error_mm", deformationJson(character, bake, bake.error)},
       {"gltf_weights", gltfWeightsName(bake.gltf_weights)},

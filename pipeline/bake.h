@@ -138,6 +138,9 @@ struct BakeResult {
   std::vector<BakedClip> clips;
   std::vector<BakedPart> parts;
   int vertex_count = 0;  // skinned vertices written
+  // Of them, those on pieces of skin the input moves rigidly, which no muscle takes weight on
+  // (rigidPieces(), MuscleWeightOptions::rigid_pieces_stay_rigid).
+  int rigid_piece_vertices = 0;
   // Pruning + 0.001 rounding: the packed buffers' weights (and WEIGHTS_n' with GltfWeights::kMilli).
   DeformationFigures error;
   GltfWeights gltf_weights = GltfWeights::kMilli;

@@ -273,6 +273,8 @@ TEST_CASE("bake: no muscle takes weight on a piece of skin the input moves rigid
       }
     }
     CHECK(muscle_weighted_on_rigid == 0);
+    // The bake counts them for its line and the stats' rigid_piece_vertices.
+    CHECK(baked.bake.rigid_piece_vertices == static_cast<int>(rigid_vertices));
     // Measured: Quaternius Cyberpunk 4,852 of its 7,778 vertices (armour plates, head, hands, sword), the
     // Soldier 4,848 of 15,836 (its head), the KayKit mannequin 1,738 (its rigid segments); the mannequin
     // and CesiumMan, one welded body each, none.
