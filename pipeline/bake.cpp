@@ -333,11 +333,8 @@ MuscleWeights weighMuscles(const Character& character, const MuscleSet& muscles,
   BodySurface body = buildBodySurface(character, bodyWeldTolerance(body_height));
   MuscleShares shares =
       muscleShares(skeleton, body.skin(character), body.graph, muscles, radii, options.weights, options.threads);
-  if (options.weights.rigid_pieces_stay_rigid) {
-    const std::vector<char> rigid = rigidPieces(body.skin(character), body.graph);
-    result->rigid_piece_vertices =
-        static_cast<int>(std::count_if(body.graph.weld_of_vertex.begin(), body.graph.weld_of_vertex.end(), [&](int w) { return rigid[w] != 0; }));
-  }
+  result->rigid_piece_vertices = static_cast<int>(std::count_if(body.graph.weld_of_vertex.begin(), body.graph.weld_of_vertex.end(),
+                                                                 [&](int w) { return shares.rigid[w] != 0; }));
   result->muscles = muscles;
   chooseCarrierJoints(character, body, shares, &result->muscles);
   const MuscleSet& rigged = result->muscles;

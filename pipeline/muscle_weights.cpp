@@ -11,6 +11,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace rigbake {
 namespace {
@@ -226,7 +227,7 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
   std::vector<Eigen::Vector3d> welded_position(welded_count);
   for (int v = static_cast<int>(part.positions.size()) - 1; v >= 0; --v) welded_position[surface.weld_of_vertex[v]] = part.positions[v];
   const size_t muscle_count = muscles.parts.size();
-  const std::vector<char> rigid =
+  std::vector<char> rigid =
       options.rigid_pieces_stay_rigid ? rigidPieces(part, surface) : std::vector<char>(static_cast<size_t>(welded_count), 0);
   // Each muscle's shares above 0, welded vertices ascending.
   std::vector<std::vector<std::pair<int, double>>> per_muscle(muscle_count);
@@ -290,6 +291,7 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
       shares.share[fill[w]++] = value;
     }
   }
+  shares.rigid = std::move(rigid);
   return shares;
 }
 

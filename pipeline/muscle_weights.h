@@ -65,6 +65,9 @@ struct MuscleShares {
   std::vector<std::uint32_t> first;  // welded vertices + 1
   std::vector<int> muscle;
   std::vector<double> share;
+  // Per welded vertex: 1 on a piece the input moves rigidly (rigidPieces()), which takes no share; all 0
+  // without MuscleWeightOptions::rigid_pieces_stay_rigid.
+  std::vector<char> rigid;
 };
 // Muscles on `threads` threads (pipeline/parallel.h); the same shares at any count.
 MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const SurfaceGraph& surface,
