@@ -8,8 +8,9 @@
   regions:   characters on which no body region loses more than 1 point of volume beyond plain skinning.
 Beneath, the same counts for the yardsticks the issue names, dual quaternions and centres of rotation, each
 scored against plain skinning as the rig is (regions: dual quaternions only; the stats carry no
-centre-of-rotation region volumes). Below that, where to look: each character's roughest clip's lumpiest vertex and its worst region's
-place (the vertex taking most of its loss), as the stats name them (docs/deformation-quality.md).
+centre-of-rotation region volumes). Below that, where to look: each character's roughest clip's
+lumpiest vertex and its worst region's place (the vertex taking most of its loss), as the stats name
+them (docs/deformation-quality.md).
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
 import os
@@ -38,61 +39,70 @@ def method_change(quality, clip, key):
     return quality["body"]["per_clip"][clip][key]["change_percent"]
 
 
+def character_counts(quality, key):
+    """One character's four counts for skinning `key` ("rig", "dual_quaternion", "centre_of_rotation"), each
+    [passed, of], judged against plain skinning: its roughness rise against plain skinning's floored at the
+    stats' floor (the rig's by its `roughness_ratio`, as validate judges), its arm clips' whole-body change
+    against half of plain skinning's, its crease samples (crease_no_worse), and its worst region loss beyond
+    plain skinning as (points, region, clip) with the regions count, or None where the stats have no regions
+    for `key` (centres of rotation)."""
+    counts = {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0], "regions": None, "worst_region": None}
+    for clip, figures in quality["surface"]["per_clip"].items():
+        rise = figures["roughness_rise_p95_mm"]
+        floored = max(rise["input"], figures["roughness_floor_mm"])
+        ratio = figures["roughness_ratio"] if key == "rig" else rise[key] / floored
+        counts["roughness"][0] += ratio <= 1.2
+        counts["roughness"][1] += 1
+    for clip in quality["body"]["per_clip"]:
+        if clip in ARM_CLIPS:
+            plain = quality["body"]["per_clip"][clip]["input"]["change_percent"]
+            counts["halved"][0] += abs(method_change(quality, clip, key)) <= 0.5 * abs(plain)
+            counts["halved"][1] += 1
+    for per in quality["creases"]["per_clip"].values():
+        for v in per.values():
+            counts["creases"][0] += crease_no_worse(v[key], v["input"])
+            counts["creases"][1] += 1
+    if key != "centre_of_rotation":
+        worst = (0.0, None, None)
+        for region, data in quality["regions"].items():
+            for clip, v in data["per_clip"].items():
+                loss = max(0.0, min(v["input"]["change_percent"], 0.0) - v[key]["change_percent"])
+                if loss > worst[0]:
+                    worst = (loss, region, clip)
+        counts["worst_region"] = worst
+        counts["regions"] = [1 if worst[0] <= 1.0 else 0, 1]
+    return counts
+
+
 def score_method(out, key):
-    """The four counts for a comparison skinning, judged as the rig is: its roughness rise against plain
-    skinning's (floored), its arm clips' change against plain skinning's, its crease samples against plain
-    skinning's, its regions' loss beyond plain skinning (None where the stats have no regions for it)."""
-    totals = {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0], "regions": [0, 0] if key == "dual_quaternion" else None}
+    """The four counts for a comparison skinning over every character, judged as the rig is (regions None
+    where the stats have none for it)."""
+    totals = {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0],
+              "regions": None if key == "centre_of_rotation" else [0, 0]}
     for name in NAMES:
-        quality = json.load(open(os.path.join(out, name + ".stats.json")))["deformation_quality"]
-        for clip, figures in quality["surface"]["per_clip"].items():
-            rise = figures["roughness_rise_p95_mm"]
-            totals["roughness"][0] += rise[key] <= 1.2 * max(rise["input"], figures["roughness_floor_mm"])
-            totals["roughness"][1] += 1
-            if clip in ARM_CLIPS:
-                plain = quality["body"]["per_clip"][clip]["input"]["change_percent"]
-                totals["halved"][0] += abs(method_change(quality, clip, key)) <= 0.5 * abs(plain)
-                totals["halved"][1] += 1
-        for per in quality["creases"]["per_clip"].values():
-            for v in per.values():
-                totals["creases"][0] += crease_no_worse(v[key], v["input"])
-                totals["creases"][1] += 1
-        if totals["regions"] is not None:
-            worst = max([max(0.0, min(v["input"]["change_percent"], 0.0) - v[key]["change_percent"])
-                         for data in quality["regions"].values() for v in data["per_clip"].values()] + [0.0])
-            totals["regions"][0] += worst <= 1.0
-            totals["regions"][1] += 1
+        counts = character_counts(json.load(open(os.path.join(out, name + ".stats.json")))["deformation_quality"], key)
+        for item, total in totals.items():
+            if total is not None:
+                total[0] += counts[item][0]
+                total[1] += counts[item][1]
     return totals
 
 
 def score(out):
     rows, totals = [], {"roughness": [0, 0], "halved": [0, 0], "creases": [0, 0], "regions": [0, 0]}
     for name in NAMES:
-        stats = json.load(open(os.path.join(out, name + ".stats.json")))
-        quality = stats["deformation_quality"]
-        clips = list(quality["body"]["per_clip"].keys())
-        ratios = [v["roughness_ratio"] for v in quality["surface"]["per_clip"].values()]
-        row = {"character": name, "clips": len(clips), "roughness": [sum(r <= 1.2 for r in ratios), len(ratios)],
-               "roughest": max(ratios)}
-        arm = [c for c in clips if c in ARM_CLIPS]
-        halved = [c for c in arm
-                  if abs(quality["body"]["per_clip"][c]["rig"]["change_percent"])
-                  <= 0.5 * abs(quality["body"]["per_clip"][c]["input"]["change_percent"])]
-        row["halved"] = [len(halved), len(arm)]
-        roughest_clip = max(quality["surface"]["per_clip"], key=lambda c: quality["surface"]["per_clip"][c]["roughness_ratio"])
-        row["lumpiest"] = quality["surface"]["per_clip"][roughest_clip].get("lumpiest_at")
-        samples = [(c, k, v) for c, per in quality["creases"]["per_clip"].items() for k, v in per.items()]
-        row["creases"] = [sum(crease_no_worse(v["rig"], v["input"]) for _, _, v in samples), len(samples)]
-        worst = (0.0, None, None)
-        for region, data in quality["regions"].items():
-            for clip, v in data["per_clip"].items():
-                loss = max(0.0, min(v["input"]["change_percent"], 0.0) - v["rig"]["change_percent"])
-                if loss > worst[0]:
-                    worst = (loss, region, clip)
-        row["worst_region"] = {"points": worst[0], "region": worst[1], "clip": worst[2],
-                               "place": quality["regions"][worst[1]]["per_clip"][worst[2]]["rig"].get("lost_most_at")
-                               if worst[1] else None}
-        row["regions"] = [1 if worst[0] <= 1.0 else 0, 1]
+        quality = json.load(open(os.path.join(out, name + ".stats.json")))["deformation_quality"]
+        counts = character_counts(quality, "rig")
+        per_clip = quality["surface"]["per_clip"]
+        roughest_clip = max(per_clip, key=lambda c: per_clip[c]["roughness_ratio"])
+        worst = counts["worst_region"]
+        row = {"character": name, "clips": len(quality["body"]["per_clip"]), "roughness": counts["roughness"],
+               "roughest": per_clip[roughest_clip]["roughness_ratio"], "halved": counts["halved"],
+               "lumpiest": per_clip[roughest_clip].get("lumpiest_at"), "creases": counts["creases"],
+               "worst_region": {"points": worst[0], "region": worst[1], "clip": worst[2],
+                                "place": quality["regions"][worst[1]]["per_clip"][worst[2]]["rig"].get("lost_most_at")
+                                if worst[1] else None},
+               "regions": counts["regions"]}
         rows.append(row)
         for key in totals:
             totals[key][0] += row[key][0]
