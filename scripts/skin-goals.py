@@ -11,6 +11,13 @@ scored against plain skinning as the rig is (regions: dual quaternions only; the
 centre-of-rotation region volumes). Below that, where to look: each character's roughest clip's
 lumpiest vertex and its worst region's place (the vertex taking most of its loss), as the stats name
 them (docs/deformation-quality.md).
+Then, beside the goals, the rig's figures no count above takes, so that a change is weighed on them too
+(docs/deformation-quality.md, "Weighing a change"): joint regions (the skin about each joint, uncapped)
+losing more than 1 point beyond plain skinning, of every joint region and clip, and the largest; the
+volume kept, the median over clips of the rig's whole-body change over plain skinning's (clips where plain
+skinning changes the body by more than 0.05 %); and the seams' largest opening under the rig on the clips
+plain skinning keeps closed (at most 0.05 mm; where the input's own weights open a place, rounding scales
+that opening, docs/deformation-quality.md "Seams").
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
 import os
@@ -74,6 +81,23 @@ def character_counts(quality, key):
     return counts
 
 
+def beside_goals(quality):
+    """The rig's figures beside the goal counts: joint-region clips losing over 1 point beyond plain skinning
+    [count, of] and the largest loss, the median of |rig| / |plain| whole-body change over the clips where
+    plain skinning changes the body by more than 0.05 %, and the largest seam opening under the rig on the
+    clips plain skinning keeps closed (within 0.05 mm; mm) with [how many clips that is, of]."""
+    losses = [v["loss_beyond_input_points"] for per in quality["joint_regions"]["per_clip"].values() for v in per.values()]
+    ratios = sorted(abs(b["rig"]["change_percent"]) / abs(b["input"]["change_percent"])
+                    for b in quality["body"]["per_clip"].values() if abs(b["input"]["change_percent"]) > 0.05)
+    middle = len(ratios) // 2
+    kept = None if not ratios else (ratios[middle] if len(ratios) % 2 else 0.5 * (ratios[middle - 1] + ratios[middle]))
+    closed = [v["rig_mm"] for v in quality["seams"]["per_clip"].values() if v["input_mm"] <= 0.05]
+    return {"joint_regions_over_1": [sum(x > 1.0 for x in losses), len(losses)],
+            "joint_region_worst": max(losses, default=0.0), "kept_median": kept,
+            "seam_on_closed_clips_mm": max(closed, default=0.0),
+            "clips_plain_keeps_closed": [len(closed), len(quality["seams"]["per_clip"])]}
+
+
 def score_method(out, key):
     """The four counts for a comparison skinning over every character, judged as the rig is (regions None
     where the stats have none for it)."""
@@ -102,7 +126,7 @@ def score(out):
                "worst_region": {"points": worst[0], "region": worst[1], "clip": worst[2],
                                 "place": quality["regions"][worst[1]]["per_clip"][worst[2]]["rig"].get("lost_most_at")
                                 if worst[1] else None},
-               "regions": counts["regions"]}
+               "regions": counts["regions"], "beside": beside_goals(quality)}
         rows.append(row)
         for key in totals:
             totals[key][0] += row[key][0]
@@ -130,6 +154,16 @@ def main():
     for name, t in methods.items():
         regions = "%d/%d characters within 1 point" % tuple(t["regions"]) if t["regions"] else "(no region figures)"
         print("%-14s %6d/%-3d %9s %4d/%-3d %5d/%-3d  %s" % (name, *t["roughness"], "", *t["halved"], *t["creases"], regions))
+    print("\nbeside the goals (the rig): joint regions over 1 point beyond plain, the largest; volume kept"
+          " (median of rig / plain change); seams")
+    for r in rows:
+        b = r["beside"]
+        kept = "%.2f" % b["kept_median"] if b["kept_median"] is not None else "-"
+        print("%-14s %5d/%-5d %6.2f  kept %s  seams %.3f mm on the %d/%d clips plain skinning keeps closed" % (
+            r["character"], *b["joint_regions_over_1"], b["joint_region_worst"], kept, b["seam_on_closed_clips_mm"],
+            *b["clips_plain_keeps_closed"]))
+    over = [sum(r["beside"]["joint_regions_over_1"][i] for r in rows) for i in (0, 1)]
+    print("%-14s %5d/%-5d" % ("total", *over))
     print("\nwhere to look (mesh 'name' vertex, bind position):")
     for r in rows:
         lump, place = r["lumpiest"], r["worst_region"]["place"]
