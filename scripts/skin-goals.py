@@ -8,16 +8,15 @@
   regions:   characters on which no body region loses more than 1 point of volume beyond plain skinning.
 Beneath, the same counts for the yardsticks the issue names, dual quaternions and centres of rotation, each
 scored against plain skinning as the rig is (regions: dual quaternions only; the stats carry no
-centre-of-rotation region volumes). Below that, where to look: each character's roughest clip's
-lumpiest vertex and its worst region's place (the vertex taking most of its loss), as the stats name
-them (docs/deformation-quality.md).
-Then, beside the goals, the rig's figures no count above takes, so that a change is weighed on them too
-(docs/deformation-quality.md, "Weighing a change"): joint regions (the skin about each joint, uncapped)
-losing more than 1 point beyond plain skinning, of every joint region and clip, and the largest; the
-volume kept, the median over clips of the rig's whole-body change over plain skinning's (clips where plain
-skinning changes the body by more than 0.05 %); and the seams' largest opening under the rig on the clips
-plain skinning keeps closed (at most 0.05 mm; where the input's own weights open a place, rounding scales
-that opening, docs/deformation-quality.md "Seams").
+centre-of-rotation region volumes). Then, beside the goals, the rig's figures no count above takes, so
+that a change is weighed on them too (docs/deformation-quality.md, "Weighing a change"): joint regions (the
+skin about each joint, uncapped) losing more than 1 point beyond plain skinning, of every joint region and
+clip, and the largest; the volume kept, the median over clips of the rig's whole-body change over plain
+skinning's (clips where plain skinning changes the body by more than 0.05 %); and the seams' largest
+opening under the rig on the clips plain skinning keeps closed (at most 0.05 mm; where the input's own
+weights open a place, rounding scales that opening, docs/deformation-quality.md "Seams"). Last, where to
+look: each character's roughest clip's lumpiest vertex and its worst region's place (the vertex taking most
+of its loss), as the stats name them (docs/deformation-quality.md).
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
 import os
