@@ -14,13 +14,14 @@ nlohmann::json errorJson(const DeformationError& error) {
   return {{"max", error.max_displacement * 1000.0}, {"rms", error.rms_displacement * 1000.0}};
 }
 
-// Where to look in the input file: the glTF mesh, primitive and vertex, and when in which clip.
+// Where to look in the input file, as every skin place is named (skinPlaceJson(): mesh, primitive,
+// vertex and bind position), and when in which clip.
 nlohmann::json peakJson(const Character& character, const BakedClip& clip, const ErrorPeak& peak) {
   if (peak.vertex < 0) return nullptr;
-  const MeshPart& mesh = character.meshes[peak.mesh_part];
-  return {{"clip", clip.name},          {"time_s", peak.time},
-          {"mesh", mesh.name},          {"gltf_mesh", mesh.gltf_mesh},
-          {"primitive", mesh.gltf_primitive}, {"vertex", peak.vertex}};
+  nlohmann::json out = skinPlaceJson(skinPlace(character, peak.mesh_part, peak.vertex));
+  out["clip"] = clip.name;
+  out["time_s"] = peak.time;
+  return out;
 }
 
 // max, rms, worst and per_clip of one set of rounded weights.

@@ -27,15 +27,6 @@ nlohmann::json moveJson(const MuscleSkinMove& move) {
           {"vertices", move.vertices}};
 }
 
-// Where to find a skin place: the file's mesh, primitive and vertex, and the bind position.
-nlohmann::json skinPlaceJson(const SkinPlace& place) {
-  return {{"mesh", place.mesh},
-          {"gltf_mesh", place.gltf_mesh},
-          {"primitive", place.gltf_primitive},
-          {"vertex", place.vertex},
-          {"bind_position", {place.bind.x(), place.bind.y(), place.bind.z()}}};
-}
-
 // Where the rig's skin rises most beyond plain skinning's at the roughest sample; null when nowhere.
 nlohmann::json lumpJson(const LumpPlace& lump) {
   if (!lump.at.found) return nullptr;
@@ -64,6 +55,14 @@ nlohmann::json contactJson(const CreaseMethodContact& contact) {
 }
 
 }  // namespace
+
+nlohmann::json skinPlaceJson(const SkinPlace& place) {
+  return {{"mesh", place.mesh},
+          {"gltf_mesh", place.gltf_mesh},
+          {"primitive", place.gltf_primitive},
+          {"vertex", place.vertex},
+          {"bind_position", {place.bind.x(), place.bind.y(), place.bind.z()}}};
+}
 
 nlohmann::json deformationQualityJson(const DeformationQuality& quality) {
   nlohmann::json body_clips = nlohmann::json::object();

@@ -6,9 +6,14 @@
 #include <nlohmann/json.hpp>
 
 #include "pipeline/deformation_quality.h"
+#include "pipeline/skin_place.h"
 
 namespace rigbake {
 
 nlohmann::json deformationQualityJson(const DeformationQuality& quality);
+
+// Where to find a skin place (pipeline/skin_place.h): `mesh`, `gltf_mesh`, `primitive`, `vertex` and
+// `bind_position`, the fields every place in the stats and report.json carries.
+nlohmann::json skinPlaceJson(const SkinPlace& place);
 
 }  // namespace rigbake

@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_support.h"
+#include "formats/gltf_document.h"
 #include "formats/packed_file.h"
 #include "glb_support.h"
 
@@ -87,6 +88,11 @@ TEST_CASE("cli bake: stats, packed file and glTF come out, with the documented f
   CHECK(worst["vertex"].get<int>() < stats["vertices"].get<int>());
   CHECK(worst["time_s"].get<double>() >= 0.0);
   CHECK(worst["time_s"].get<double>() <= 2.0);
+  // Named as every skin place is, with its bind position: the sample's one mesh sits at the origin, so
+  // that is the file's own vertex position.
+  const rigbake::LoadedCharacter sample = rigbake::loadCharacter(sampleGlbPathForCli());
+  const Eigen::Vector3d& position = sample.character.meshes.at(0).positions.at(worst["vertex"].get<size_t>());
+  for (int axis = 0; axis < 3; ++axis) CHECK(worst["bind_position"][axis].get<double>() == Approx(position[axis]).margin(1e-6));
   // Skin data per vertex: u16 weights + u8 joints in 3 sets of 4 = 36 B; packed 10 = 3 words + 10 u8 -> 24 B.
   CHECK(stats["bytes_per_vertex"]["gltf"] == 36);
   CHECK(stats["bytes_per_vertex"]["packed"] == 24);
