@@ -20,6 +20,7 @@ of its loss), as the stats name them (docs/deformation-quality.md).
 Usage: skin-goals.py OUT_DIR [--json]"""
 import json
 import os
+import statistics
 import sys
 
 ARM_CLIPS = {"ElbowFlexion", "ArmRaise", "rom_elbow_flexion", "rom_shoulder_abduction", "rom_shoulder_flexion"}
@@ -86,10 +87,9 @@ def beside_goals(quality):
     plain skinning changes the body by more than 0.05 %, and the largest seam opening under the rig on the
     clips plain skinning keeps closed (within 0.05 mm; mm) with [how many clips that is, of]."""
     losses = [v["loss_beyond_input_points"] for per in quality["joint_regions"]["per_clip"].values() for v in per.values()]
-    ratios = sorted(abs(b["rig"]["change_percent"]) / abs(b["input"]["change_percent"])
-                    for b in quality["body"]["per_clip"].values() if abs(b["input"]["change_percent"]) > 0.05)
-    middle = len(ratios) // 2
-    kept = None if not ratios else (ratios[middle] if len(ratios) % 2 else 0.5 * (ratios[middle - 1] + ratios[middle]))
+    ratios = [abs(b["rig"]["change_percent"]) / abs(b["input"]["change_percent"])
+              for b in quality["body"]["per_clip"].values() if abs(b["input"]["change_percent"]) > 0.05]
+    kept = statistics.median(ratios) if ratios else None
     closed = [v["rig_mm"] for v in quality["seams"]["per_clip"].values() if v["input_mm"] <= 0.05]
     return {"joint_regions_over_1": [sum(x > 1.0 for x in losses), len(losses)],
             "joint_region_worst": max(losses, default=0.0), "kept_median": kept,
