@@ -12,10 +12,10 @@
 // Skin influences: glTF-Transform's `quantize` (run by `optimize` and `meshopt`) stores WEIGHTS_n in 8
 // bits and re-sorts the slots, which cuts 0.001 weights to 1/255 steps and empties the smallest ones:
 // the packed buffers (docs/packed-influences.md) and the glTF weights then disagree by up to 1.5 mm.
-// holdSkinInfluences() copies every JOINTS_n/WEIGHTS_n into a private vertex attribute that every
-// transform carries like any other (weld, simplify, join and reorder move its vertices with the rest,
-// quantize at its default level leaves attributes starting with "_" alone), and restoreSkinInfluences()
-// puts the copies back, exactly as read, before the file is written.
+// holdSkinInfluences() copies every JOINTS_n/WEIGHTS_n and packed attribute into a private vertex
+// attribute that every transform carries like any other (weld, simplify, join and reorder move its
+// vertices with the rest; its values are kept where no quantizer or in-place sort reaches them), and
+// restoreSkinInfluences() puts the copies back, exactly as read, before the file is written.
 //
 // The module imports nothing: defineRigbakeMuscleRig() takes the @gltf-transform/core module to build
 // on, so the classes extend the very Extension class of the glTF-Transform that runs them (the CLI's
@@ -27,7 +27,9 @@ export const RIGBAKE_MUSCLE_RIG_VERSION = 1;
 const MUSCLE_NODE_FIELDS = ['skinnedNode', 'originNode', 'insertionNode', 'carrierNode'];
 const JIGGLE_NODE_FIELDS = ['node', 'parentNode', 'rootNode'];
 const HELD_PREFIX = '_RIGBAKE_HELD_';
-const INFLUENCE_SEMANTIC = /^(JOINTS|WEIGHTS)_\d+$/;
+// The attributes held across transforms: the glTF influences and the packed ones (docs/packed-influences.md).
+const HELD_SEMANTIC = /^((JOINTS|WEIGHTS)_\d+|_RIGBAKE_PACKED_\w+)$/;
+const HELD_NAME = /^_RIGBAKE_HELD_(\d+)(N?)_(.+)$/;
 const ROOT_PROPERTY_TYPE = 'Root';  // core's PropertyType.ROOT
 const FLOAT = 5126;  // core's Accessor.ComponentType.FLOAT
 
@@ -147,24 +149,47 @@ export function defineRigbakeMuscleRig(core) {
   return { RigbakeMuscleRig, MuscleRig };
 }
 
-// Copies every JOINTS_n/WEIGHTS_n of every primitive into _RIGBAKE_HELD_JOINTS_n/_RIGBAKE_HELD_WEIGHTS_n
-// (raw integers, not normalized, so that no quantizer reads them as [0, 1] values). Call it after
+// Copies every JOINTS_n/WEIGHTS_n and _RIGBAKE_PACKED_* attribute of every primitive into a private
+// one, _RIGBAKE_HELD_<component type>[N]_<semantic> (N: the source was normalized). Call it after
 // reading, before any transform.
+//
+// An integer attribute is held as FLOAT values + 0.5: exact (at most 16 bits), outside [-1, 1] so that
+// no quantizer touches it (an all-zero one that is quantized still rounds back to 0), and equal to no
+// live attribute. The last matters: `dedup` merges accessors of equal content, and `quantize` re-sorts
+// JOINTS_n in place (sortPrimitiveWeights, after storing the weights in 8 bits, where two weights
+// 1/65535 apart tie and its comparator swaps them). A copy of equal content would be that same
+// accessor, re-sorted with it, and so would _RIGBAKE_PACKED_JOINTS_0, whose content is JOINTS_0's:
+// measured on CesiumMan through `optimize`, 12 mm between the packed and the glTF weights. A float
+// attribute (float weights) is held as a plain copy: quantize replaces float weights with a new
+// accessor before it sorts, so no transform writes into the old one.
 export function holdSkinInfluences(document) {
   for (const mesh of document.getRoot().listMeshes()) {
     for (const prim of mesh.listPrimitives()) {
       for (const semantic of prim.listSemantics()) {
-        if (!INFLUENCE_SEMANTIC.test(semantic) || prim.getAttribute(HELD_PREFIX + semantic)) continue;
+        if (!HELD_SEMANTIC.test(semantic) || prim.listSemantics().some((s) => (HELD_NAME.exec(s) || [])[3] === semantic)) continue;
         const source = prim.getAttribute(semantic);
-        prim.setAttribute(HELD_PREFIX + semantic, source.clone().setNormalized(false).setSparse(false));
+        const type = source.getComponentType();
+        let held;
+        if (type === FLOAT) {
+          held = source.clone().setNormalized(false).setSparse(false);
+        } else {
+          held = document.createAccessor()
+            .setType(source.getType())
+            .setArray(Float32Array.from(source.getArray(), (value) => value + 0.5))
+            .setBuffer(source.getBuffer());
+        }
+        prim.setAttribute(`${HELD_PREFIX}${type}${source.getNormalized() ? 'N' : ''}_${semantic}`, held);
       }
     }
   }
   return document;
 }
 
-// Puts the held JOINTS_n/WEIGHTS_n back in place of whatever the transforms left there and removes the
-// copies. Call it after the last transform, before writing. Returns the number of primitives restored.
+const INTEGER_ARRAYS = { 5120: Int8Array, 5121: Uint8Array, 5122: Int16Array, 5123: Uint16Array, 5125: Uint32Array };
+
+// Puts the held attributes back in place of whatever the transforms left there, in their own component
+// type, and removes the copies. Call it after the last transform, before writing. Returns the number
+// of primitives restored.
 export function restoreSkinInfluences(document) {
   let restored = 0;
   for (const mesh of document.getRoot().listMeshes()) {
@@ -173,19 +198,36 @@ export function restoreSkinInfluences(document) {
       if (held.length === 0) continue;
       const replaced = [];
       for (const semantic of prim.listSemantics()) {
-        if (!INFLUENCE_SEMANTIC.test(semantic)) continue;
+        if (!HELD_SEMANTIC.test(semantic)) continue;
         replaced.push(prim.getAttribute(semantic));
         prim.setAttribute(semantic, null);
       }
       for (const semantic of held) {
+        const [, typeText, normalizedMark, original] = HELD_NAME.exec(semantic);
+        const type = Number(typeText);
         const accessor = prim.getAttribute(semantic);
-        const original = semantic.slice(HELD_PREFIX.length);
         prim.setAttribute(semantic, null);
-        // glTF 2.0 3.7.3.3: integer WEIGHTS_n are normalized, JOINTS_n never are.
-        const normalized = original.startsWith('WEIGHTS_') && accessor.getComponentType() !== FLOAT;
+        let restoredAccessor = accessor;
+        if (type !== FLOAT) {
+          // getElement() reads a quantized (normalized) copy as its values, so an all-zero attribute
+          // that quantize stored in 12 bits rounds back to 0 like any other.
+          const count = accessor.getCount();
+          const size = accessor.getElementSize();
+          const values = new INTEGER_ARRAYS[type](count * size);
+          const element = [];
+          for (let i = 0; i < count; i++) {
+            accessor.getElement(i, element);
+            for (let k = 0; k < size; k++) values[i * size + k] = Math.round(element[k] - 0.5);
+          }
+          restoredAccessor = document.createAccessor(accessor.getName())
+            .setType(accessor.getType())
+            .setArray(values)
+            .setBuffer(accessor.getBuffer());
+          if (accessor.listParents().every((parent) => parent.propertyType === ROOT_PROPERTY_TYPE)) accessor.dispose();
+        }
         // Not sparse: glTF-Transform 4.3.0 writes the values of a sparse normalized accessor as the
         // integer part of its [0, 1] values, i.e. 0 (optimize's `sparse` step marks mostly-zero WEIGHTS_1).
-        prim.setAttribute(original, accessor.setNormalized(normalized).setSparse(false));
+        prim.setAttribute(original, restoredAccessor.setNormalized(normalizedMark === 'N').setSparse(false));
       }
       for (const accessor of replaced) {
         if (accessor.listParents().every((parent) => parent.propertyType === ROOT_PROPERTY_TYPE)) accessor.dispose();

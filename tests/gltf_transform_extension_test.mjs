@@ -5,7 +5,8 @@
 // - a transform that removes a joint the rig names makes the write fail, naming the muscle;
 // - another extension version is refused when read;
 // - quantize() stores WEIGHTS_n in 8 bits, and holdSkinInfluences()/restoreSkinInfluences() around it
-//   give back every JOINTS_n/WEIGHTS_n exactly as read.
+//   give back every JOINTS_n/WEIGHTS_n exactly as read, and the packed attributes too after dedup()
+//   made them one accessor with the JOINTS_n quantize re-sorts in place.
 // Usage: node gltf_transform_extension_test.mjs SOURCE_DIR RIGBAKE_BINARY. Exit 77 (ctest: skipped) when
 // glTF-Transform is not installed, 1 instead under CI=true.
 import assert from 'node:assert/strict';
@@ -89,7 +90,7 @@ try {
       .sort();
   const arrays = (doc) =>
     doc.getRoot().listMeshes()[0].listPrimitives()[0].listSemantics()
-      .filter((s) => /^(JOINTS|WEIGHTS)_\d$/.test(s))
+      .filter((s) => /^((JOINTS|WEIGHTS)_\d|_RIGBAKE_PACKED_\w+)$/.test(s))
       .sort()
       .map((s) => [s, Array.from(doc.getRoot().listMeshes()[0].listPrimitives()[0].getAttribute(s).getArray())]);
   document = await io.read(baked);
@@ -98,7 +99,11 @@ try {
   assert.ok(weightTypes(document).includes('WEIGHTS_0:5121'), 'quantize alone keeps 16-bit weights: the hold is pointless');
   document = rig.holdSkinInfluences(await io.read(baked));
   // (No weld here: it reorders vertices; tests/rig_pipelines_test.cpp runs the whole optimize.)
-  await document.transform(functions.quantize(), functions.prune());
+  // dedup first, as optimize does: _RIGBAKE_PACKED_JOINTS_0 holds JOINTS_0's values, so the two become
+  // one accessor, which quantize re-sorts where its 8-bit weights tie.
+  await document.transform(functions.dedup(), functions.quantize(), functions.prune());
+  const shared = document.getRoot().listMeshes()[0].listPrimitives()[0];
+  assert.equal(shared.getAttribute('_RIGBAKE_PACKED_JOINTS_0'), shared.getAttribute('JOINTS_0'), 'dedup no longer shares them');
   assert.equal(rig.restoreSkinInfluences(document), 1);
   const reread = await io.readBinary(await io.writeBinary(document));
   assert.deepEqual(weightTypes(reread), ['JOINTS_0:5121', 'JOINTS_1:5121', 'JOINTS_2:5121', 'WEIGHTS_0:5123', 'WEIGHTS_1:5123', 'WEIGHTS_2:5123']);
