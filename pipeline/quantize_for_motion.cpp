@@ -10,10 +10,11 @@
 //     sum is e^T G e with the Gram matrix G_ij = sum_t d_i(t) . d_j(t), d_i(t) = (M_i - M_0)(t) v, so a
 //     candidate costs O(n^2) once G is built.
 //  2. The figure a user sees is the worst single frame of the worst vertex. Every vertex whose pass-1
-//     error comes within kRefineShare of its part's worst is rounded again, now by its worst frame,
-//     each candidate skinned over the frames (stopping at the first frame worse than the best so far).
-// Pass 2 makes the part's worst error the least any down-or-up rounding can give, whenever the refined
-// vertices' best stays above kRefineShare of pass 1's worst (so the vertices left alone cannot
+//     error comes within kRefineShare of the character's worst (over all its parts) is rounded again,
+//     now by its worst frame, each candidate skinned over the frames (stopping at the first frame worse
+//     than the best so far).
+// Pass 2 makes the character's worst error the least any down-or-up rounding can give, whenever the
+// refined vertices' best stays above kRefineShare of pass 1's worst (so the vertices left alone cannot
 // decide it); the tests check that it does on every shared asset.
 //
 // Speed. Built frame by frame, G costs O(frames n^2) per vertex, the whole bake's largest term. But
@@ -25,8 +26,8 @@
 // frame-by-frame sums, so a vertex where two candidates come within that difference (a near tie the
 // tie tolerance decides) is costed again frame by frame, exactly as before: the roundings are the
 // reference ones (quantizeForMotionReference(), which the tests compare against on every shared asset).
-// Pass 1's worst frame is only needed where it could reach kRefineShare of the part's worst; the error
-// summed in squares bounds it (max_t |r(t)| <= sqrt(sum_t |r(t)|^2)), so the frames are only skinned
+// Pass 1's worst frame is only needed where it could reach kRefineShare of the character's worst; the
+// error summed in squares bounds it (max_t |r(t)| <= sqrt(sum_t |r(t)|^2)), so the frames are only skinned
 // for vertices whose bound gets there.
 #include "pipeline/quantize_for_motion.h"
 
@@ -732,16 +733,34 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
 
 namespace {
 
-QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
-                                 const std::vector<SkinFrame>& frames, const MomentTable& table, int threads) {
-  QuantizedInfluences out = quantizeInfluences(set, kMilliScale, threads);
-  const int slots = set.slots_per_vertex;
-  const size_t vertex_count = static_cast<size_t>(set.vertexCount());
+// One part's rounding between the passes: pass 1 for every part first, so that pass 2 refines by the
+// character's worst vertex, not each part's. A vertex on a border between meshes is in both parts
+// with the same weights; refined by each part's own worst, its two copies could round differently and
+// the border open (measured on the mannequin split by dominant joint: 0.001 steps apart on a joint).
+struct PartRounding {
+  const InfluenceSet& set;
+  const std::vector<Eigen::Vector3d>& bind_positions;
+  QuantizedInfluences out;
+  // `worst` is exact where `known`; elsewhere `bound` bounds it from above.
+  std::vector<double> worst, bound;
+  std::vector<char> known;
+  std::vector<unsigned> chosen;
+  double worst_floor = 0.0;  // a lower bound on the part's worst
+};
 
-  // Pass 1. `worst` is exact where `known`; elsewhere `bound` bounds it from above.
-  std::vector<double> worst(vertex_count, 0.0), bound(vertex_count, 0.0);
-  std::vector<char> known(vertex_count, 1);
-  std::vector<unsigned> chosen(vertex_count, 0);
+// Pass 1 of one part.
+PartRounding roundPart(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
+                       const std::vector<SkinFrame>& frames, const MomentTable& table, int threads) {
+  const size_t vertex_count = static_cast<size_t>(set.vertexCount());
+  PartRounding part{set, bind_positions, quantizeInfluences(set, kMilliScale, threads), std::vector<double>(vertex_count, 0.0),
+                    std::vector<double>(vertex_count, 0.0), std::vector<char>(vertex_count, 1),
+                    std::vector<unsigned>(vertex_count, 0), 0.0};
+  QuantizedInfluences& out = part.out;
+  const int slots = set.slots_per_vertex;
+  std::vector<double>& worst = part.worst;
+  std::vector<double>& bound = part.bound;
+  std::vector<char>& known = part.known;
+  std::vector<unsigned>& chosen = part.chosen;
   // Per chunk, a lower bound on the part's worst: a vertex's worst frame is at least its root mean square.
   std::vector<double> chunk_floor(parallelChunkCount(vertex_count, kVertexGrain), 0.0);
   const double frame_count = static_cast<double>(frames.size());
@@ -796,51 +815,57 @@ QuantizedInfluences quantizePart(const InfluenceSet& set, const std::vector<Eige
     chunk_floor[chunk] = lowest_worst;
   });
 
-  // The part's worst: only vertices whose bound reaches the largest lower bound can hold it.
-  const double worst_floor = *std::max_element(chunk_floor.begin(), chunk_floor.end());
+  part.worst_floor = chunk_floor.empty() ? 0.0 : *std::max_element(chunk_floor.begin(), chunk_floor.end());
+  return part;
+}
+
+// Gives every vertex of `part` whose bound reaches `threshold` its exact worst frame; returns the
+// largest exact worst.
+double settleWorst(PartRounding* part, const std::vector<SkinFrame>& frames, double threshold, int threads) {
+  const size_t vertex_count = part->worst.size();
+  std::vector<double>& worst = part->worst;
+  std::vector<char>& known = part->known;
   // The vertices to settle, listed, then in a few chunks per thread: chunks of the part's vertices left
   // a part of a few hundred vertices on one thread (each writes only its own vertices' worst, so the
   // chunking does not change a bit).
-  auto settle = [&](double threshold) {
-    std::vector<SettleVertex> pending;
-    for (size_t v = 0; v < vertex_count; ++v) {
-      if (known[v] || bound[v] < threshold) continue;
-      const MotionShares shares = motionShares(set, static_cast<int>(v));
-      SettleVertex entry;
-      entry.vertex = static_cast<int>(v);
-      entry.n = shares.n;
-      entry.joints = shares.joints;
-      for (int i = 0; i < shares.n; ++i)
-        entry.factor[i] = roundingError(shares, chosen[v], i);
-      pending.push_back(entry);
-      known[v] = 1;
-    }
-    const size_t chunks = 4 * static_cast<size_t>(resolveThreadCount(threads));
-    const size_t grain = std::max<size_t>(16, (pending.size() + chunks - 1) / chunks);
-    parallelFor(threads, pending.size(), grain, [&](size_t, size_t begin, size_t end) {
-      for (size_t k = begin; k < end; ++k)
-        worst[static_cast<size_t>(pending[k].vertex)] =
-            motionWorstFrame(pending[k], bind_positions[static_cast<size_t>(pending[k].vertex)], frames);
-    });
-  };
-  settle(worst_floor);
-  double part_worst = 0.0;
-  for (size_t v = 0; v < vertex_count; ++v)
-    if (known[v]) part_worst = std::max(part_worst, worst[v]);
-  // Every vertex that could be above kRefineShare of it gets its exact worst frame.
-  settle(kRefineShare * part_worst);
-
-  // Pass 2 on the vertices that could decide the part's worst error.
-  std::vector<int> refine;
+  std::vector<SettleVertex> pending;
   for (size_t v = 0; v < vertex_count; ++v) {
-    if (!known[v] || worst[v] <= kRefineShare * part_worst) continue;
+    if (known[v] || part->bound[v] < threshold) continue;
+    const MotionShares shares = motionShares(part->set, static_cast<int>(v));
+    SettleVertex entry;
+    entry.vertex = static_cast<int>(v);
+    entry.n = shares.n;
+    entry.joints = shares.joints;
+    for (int i = 0; i < shares.n; ++i)
+      entry.factor[i] = roundingError(shares, part->chosen[v], i);
+    pending.push_back(entry);
+    known[v] = 1;
+  }
+  const size_t chunks = 4 * static_cast<size_t>(resolveThreadCount(threads));
+  const size_t grain = std::max<size_t>(16, (pending.size() + chunks - 1) / chunks);
+  parallelFor(threads, pending.size(), grain, [&](size_t, size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k)
+      worst[static_cast<size_t>(pending[k].vertex)] =
+          motionWorstFrame(pending[k], part->bind_positions[static_cast<size_t>(pending[k].vertex)], frames);
+  });
+  double largest = 0.0;
+  for (size_t v = 0; v < vertex_count; ++v)
+    if (known[v]) largest = std::max(largest, worst[v]);
+  return largest;
+}
+
+// Pass 2 on the vertices of `part` that could decide the character's worst error `character_worst`
+// (every vertex above kRefineShare of it has settled its exact worst frame).
+void refinePart(PartRounding* part, const std::vector<SkinFrame>& frames, double character_worst, int threads) {
+  std::vector<int> refine;
+  for (size_t v = 0; v < part->worst.size(); ++v) {
+    if (!part->known[v] || part->worst[v] <= kRefineShare * character_worst) continue;
     refine.push_back(static_cast<int>(v));
   }
   parallelForEach(threads, refine.size(), [&](size_t r) {
     const int v = refine[r];
-    refineVertex(set, v, bind_positions[v], frames, worst[v], &out);
+    refineVertex(part->set, v, part->bind_positions[v], frames, part->worst[v], &part->out);
   });
-  return out;
 }
 
 }  // namespace
@@ -853,7 +878,22 @@ std::vector<QuantizedInfluences> quantizeForMotion(const std::vector<MotionPart>
     return out;
   }
   const MomentTable table = momentTable(parts, frames, threads);
-  for (const MotionPart& part : parts) out.push_back(quantizePart(*part.set, *part.bind_positions, frames, table, threads));
+  std::vector<PartRounding> rounding;
+  rounding.reserve(parts.size());
+  double floor = 0.0;
+  for (const MotionPart& part : parts) {
+    rounding.push_back(roundPart(*part.set, *part.bind_positions, frames, table, threads));
+    floor = std::max(floor, rounding.back().worst_floor);
+  }
+  // The character's worst: only vertices whose bound reaches the largest lower bound can hold it.
+  double character_worst = 0.0;
+  for (PartRounding& part : rounding) character_worst = std::max(character_worst, settleWorst(&part, frames, floor, threads));
+  // Every vertex that could be above kRefineShare of it gets its exact worst frame, then pass 2.
+  for (PartRounding& part : rounding) {
+    settleWorst(&part, frames, kRefineShare * character_worst, threads);
+    refinePart(&part, frames, character_worst, threads);
+  }
+  for (PartRounding& part : rounding) out.push_back(std::move(part.out));
   return out;
 }
 

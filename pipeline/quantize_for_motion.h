@@ -24,8 +24,10 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
 QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector<Eigen::Vector3d>& bind_positions,
                                       const std::vector<SkinFrame>& frames, int threads);
 
-// quantizeForMotion() of several mesh parts skinned by the same frames, in `parts` order: the same
-// roundings as one call per part, with the moments of the joints the parts share summed once.
+// quantizeForMotion() of several mesh parts skinned by the same frames, in `parts` order, with the
+// moments of the joints the parts share summed once. Pass 2 refines by the worst vertex of all the
+// parts (the character's), so a body cut into other meshes rounds the same; one part alone rounds as
+// the single-set call does.
 struct MotionPart {
   const InfluenceSet* set = nullptr;
   const std::vector<Eigen::Vector3d>* bind_positions = nullptr;

@@ -1,8 +1,8 @@
-// One rounding per place on the skin. The motion-aware rounding (pipeline/quantize_for_motion.h) picks
-// each vertex's 0.001 rounding against its own part's worst vertex, so two vertices of different mesh
-// parts at one place with the same weights could round apart, and the border between the meshes would
-// open by up to a rounding's error (0.15-0.7 mm). Here every such vertex takes the rounding of the
-// first vertex at its place: a valid rounding of its own weights, since they are the same.
+// One rounding per place on the skin. The motion-aware rounding (pipeline/quantize_for_motion.h) holds
+// every part to the character's worst vertex, but two vertices of different mesh parts at one place
+// whose weights agree only to 1e-9 (sums in another order) can still break a near tie apart, and the
+// border between the meshes would open by up to a rounding's error (0.15-0.7 mm). Here every such
+// vertex takes the rounding of the first vertex at its place: a valid rounding of its own weights.
 #pragma once
 
 #include <utility>
