@@ -708,7 +708,10 @@ std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& featu
     return sum;
   };
   // Distance to the nearest pose taken; rest (all features zero) counts as taken, so the first pose is
-  // the one farthest from it. Ties go to the earlier candidate.
+  // the one farthest from it. Ties go to the earlier candidate, and distances within kTieTolerance of
+  // each other tie: the features carry the last bits of sums over the skin, which change with the
+  // vertices' order, and one pose taken elsewhere moved a region of the fitted Male Casual by 1.6 points.
+  constexpr double kTieTolerance = 1e-9;
   std::vector<double> nearest(n, 0.0);
   for (size_t i = 0; i < n; ++i) {
     for (double f : features[i]) nearest[i] += f * f;
@@ -717,7 +720,7 @@ std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& featu
   for (size_t c = 0; c < count; ++c) {
     size_t next = n;
     for (size_t i = 0; i < n; ++i) {
-      if (!taken[i] && (next == n || nearest[i] > nearest[next])) next = i;
+      if (!taken[i] && (next == n || nearest[i] > nearest[next] * (1.0 + kTieTolerance))) next = i;
     }
     taken[next] = 1;
     chosen.push_back(next);

@@ -223,8 +223,9 @@ TEST_CASE("FBX cli: place and bake Male_Casual, the GLB passes the Khronos valid
   // 1.118 % before its 7 meshes were welded into one body for the muscle weights, which closed their
   // borders: see tests/skin_seams_test.cpp; 1.182 % before the caps paired the steps where openings
   // touch, docs/deformation-quality.md "Holes are capped", and a compression key's bound fell towards
-  // rest, docs/muscle-model.md).
-  CHECK(bake.err.find("whole-body volume change (RMS) 4.706 % -> 1.134 %") != std::string::npos);
+  // rest, docs/muscle-model.md; 4.706 % -> 1.134 % before the fit's pose sampling let distances within
+  // 1e-9 of each other tie, which takes one other pose here).
+  CHECK(bake.err.find("whole-body volume change (RMS) 4.705 % -> 1.133 %") != std::string::npos);
   // Male_Casual's exporter gives some places two different weightings, so the input itself opens them
   // (61.7 mm in Man_Jump); rounding those weights to 0.001 scales that by 0.17 %, which the seam line
   // says is not the muscles' crack (with 1/65535 weights it is 0.0012 mm).
