@@ -734,9 +734,9 @@ QuantizedInfluences quantizeForMotion(const InfluenceSet& set, const std::vector
 namespace {
 
 // One part's rounding between the passes: pass 1 for every part first, so that pass 2 refines by the
-// character's worst vertex, not each part's. A vertex on a border between meshes is in both parts
-// with the same weights; refined by each part's own worst, its two copies could round differently and
-// the border open (measured on the mannequin split by dominant joint: 0.001 steps apart on a joint).
+// character's worst vertex, not each part's. Refined by each part's own worst, a body cut into other
+// meshes rounded otherwise (the mannequin split by dominant joint: several vertices 0.001 apart from
+// the whole's rounding).
 struct PartRounding {
   const InfluenceSet& set;
   const std::vector<Eigen::Vector3d>& bind_positions;
