@@ -187,6 +187,11 @@ export function holdSkinInfluences(document) {
 
 const INTEGER_ARRAYS = { 5120: Int8Array, 5121: Uint8Array, 5122: Int16Array, 5123: Uint16Array, 5125: Uint32Array };
 
+// Disposes `accessor` when nothing but the document root holds it any more.
+function disposeIfUnused(accessor) {
+  if (accessor.listParents().every((parent) => parent.propertyType === ROOT_PROPERTY_TYPE)) accessor.dispose();
+}
+
 // Puts the held attributes back in place of whatever the transforms left there, in their own component
 // type, and removes the copies. Call it after the last transform, before writing. Returns the number
 // of primitives restored.
@@ -223,15 +228,13 @@ export function restoreSkinInfluences(document) {
             .setType(accessor.getType())
             .setArray(values)
             .setBuffer(accessor.getBuffer());
-          if (accessor.listParents().every((parent) => parent.propertyType === ROOT_PROPERTY_TYPE)) accessor.dispose();
+          disposeIfUnused(accessor);
         }
         // Not sparse: glTF-Transform 4.3.0 writes the values of a sparse normalized accessor as the
         // integer part of its [0, 1] values, i.e. 0 (optimize's `sparse` step marks mostly-zero WEIGHTS_1).
         prim.setAttribute(original, restoredAccessor.setNormalized(normalizedMark === 'N').setSparse(false));
       }
-      for (const accessor of replaced) {
-        if (accessor.listParents().every((parent) => parent.propertyType === ROOT_PROPERTY_TYPE)) accessor.dispose();
-      }
+      for (const accessor of replaced) disposeIfUnused(accessor);
       restored++;
     }
   }
