@@ -13,6 +13,7 @@
 #include "formats/bake_stats_json.h"
 #include "pipeline/bake.h"
 #include "pipeline/check_registry.h"
+#include "pipeline/check_support.h"
 #include "pipeline/leg_coverage.h"
 
 namespace rigbake::cli {
@@ -141,6 +142,13 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << " %, rig " << 100.0 * v.rig.change << " %)" << std::noshowpos;
     if (region < region_clip->region_places.size() && region_clip->region_places[region].at.found)
       std::cerr << ", " << regionLossPlaceText(region_clip->region_places[region]);
+    // The part of it the fit did not see: the fit keeps the regions with the weights before the cut.
+    if (region < region_clip->region_places.size() && region_clip->region_places[region].cut_measured &&
+        region_clip->region_places[region].cut_points < -0.005)
+      std::cerr << "; " << fixedDecimals(-region_clip->region_places[region].cut_points, 2)
+                << " points of the loss from cutting the weights to " << bake.influences
+                << " influences and rounding them (the response fit keeps the regions with the weights before the cut"
+                << (bake.influences < 10 ? "; more influences cut less)" : ")");
     if (loss > allowed)
       std::cerr << "; more than the " << std::setprecision(0) << allowed << " point `rigbake validate` allows by default (SKIN_REGION_VOLUME_LOSS, an error)";
     std::cerr << "\n";
@@ -389,8 +397,9 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "body region, bytes per vertex, and the skin's: seams, roughness, strain, occupied volume, creases and "
                       "joint regions against plain, dual-quaternion and centre-of-rotation skinning) as JSON; - for "
                       "standard output. Where a figure fails it names the vertex to look at: the one taking most of a "
-                      "region's lost volume (lost_most_at) and where the skin is lumpiest (lumpiest_at), by mesh, "
-                      "vertex and bind position. The skin's figures cost more than the rest of the bake: a bake without "
+                      "region's lost volume (lost_most_at, with cut_points: how much of the loss cutting the weights to "
+                      "--influences made, which the response fit does not see) and where the skin is lumpiest "
+                      "(lumpiest_at), by mesh, vertex and bind position. The skin's figures cost more than the rest of the bake: a bake without "
                       "--stats or --json skips them");
   command->add_option("--response", options->response,
                       "Muscle response (the set-driven bulge and scale keys): auto = fit to the clips the parts that still "

@@ -45,6 +45,7 @@ nlohmann::json lossPlaceJson(const RegionLossPlace& place) {
   out["points"] = place.points;
   out["rig_minus_input_points"] = place.difference_points;
   out["first_order_points"] = place.first_order_points;
+  if (place.cut_measured) out["cut_points"] = place.cut_points;
   return out;
 }
 

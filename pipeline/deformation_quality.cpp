@@ -697,8 +697,11 @@ void clipExtremes(const std::vector<MeasuredClip>& clips, const FramePlan& plan,
 
 // Where each region that loses beyond plain skinning in a clip loses it (pipeline/region_loss_place.h),
 // at the rig's extreme sample; one task per clip and region, so the same at any thread count.
+// `full`: per part, the weights before the cut and the rounding (the first approximation's reference),
+// or null.
 void locateRegionLosses(const Character& character, const std::vector<MeasuredPart>& parts, const std::vector<MeasuredClip>& clips,
-                        const std::vector<PreparedPart>& prepared, int threads, DeformationQuality* figures) {
+                        const std::vector<PreparedPart>& prepared, const std::vector<ErrorWeights>* full, int threads,
+                        DeformationQuality* figures) {
   const size_t region_count = figures->regions.size();
   std::vector<std::pair<size_t, size_t>> tasks;  // (clip, region)
   for (size_t c = 0; c < figures->clips.size(); ++c) {
@@ -716,7 +719,7 @@ void locateRegionLosses(const Character& character, const std::vector<MeasuredPa
     std::vector<RegionPiece> pieces;
     for (size_t p = 0; p < prepared.size(); ++p)
       pieces.push_back(RegionPiece{parts[p].mesh_part, &prepared[p].surface, &prepared[p].regions[k].patch, &parts[p].input,
-                                   &parts[p].rig});
+                                   &parts[p].rig, full ? (*full)[p].reference : nullptr});
     figures->clips[c].region_places[k] =
         regionLossPlace(character, pieces, (*clip.frames)[static_cast<size_t>(at - clip.times.begin())], figures->region_volumes[k],
                         time, &scratch[worker]);
@@ -796,7 +799,7 @@ DeformationMeasures measureDeformation(const Character& character, const std::ve
   if (!quality) return measures;
 
   clipExtremes(clips, plan, pass.volumes, bind, region_count, &figures);
-  locateRegionLosses(character, parts, clips, prepared, threads, &figures);
+  locateRegionLosses(character, parts, clips, prepared, errors.empty() ? nullptr : &errors[0], threads, &figures);
   for (int m = 0; m < muscle_count; ++m) {
     MuscleQuality muscle;
     muscle.muscle = muscles.parts[m].fullName();

@@ -33,6 +33,13 @@ struct RegionLossPlace {
   double first_order_points = 0.0;  // sum of c_v over the region: the rig's change minus plain's, to first order
   double difference_points = 0.0;   // the same difference measured exactly (both closed pieces' volumes)
   double time = 0.0;                // the sample, seconds into the clip
+  // Where the pieces carry the weights as the bake made them before writing them (RegionPiece::full):
+  // the rig's volume with the written weights minus with those, exactly (points; negative where the cut
+  // to the written influence count and the 0.001 rounding lose volume). The fit keeps the regions with the
+  // full weights, so this is the part of the loss it could not see (docs/deformation-quality.md, "Where a
+  // region loses it"). validate has only the written weights: cut_measured stays false.
+  bool cut_measured = false;
+  double cut_points = 0.0;
 };
 
 // One part's closed piece of a region: the part's welded surface, the piece over it and both weight
@@ -43,12 +50,13 @@ struct RegionPiece {
   const ClosedPatch* patch = nullptr;
   const InfluenceSet* input = nullptr;  // the input's weights (plain skinning)
   const InfluenceSet* rig = nullptr;    // the weights written
+  const InfluenceSet* full = nullptr;   // the bake's weights before the cut and the rounding; null when unknown
 };
 
 // What regionLossPlace() reuses from call to call (one per thread): positions indexed by welded vertex,
 // of which each call writes and reads only its region's.
 struct RegionLossScratch {
-  std::vector<Eigen::Vector3d> plain, rig, middle, gradient, plain_listed, rig_listed;
+  std::vector<Eigen::Vector3d> plain, rig, middle, gradient, full, plain_listed, rig_listed, full_listed;
   std::vector<int> needed;
 };
 

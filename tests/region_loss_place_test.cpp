@@ -51,7 +51,7 @@ struct Scene {
   ClosedPatch patch;
   InfluenceSet plain, rig;
   double bind_volume = 0.0;
-  RegionPiece piece() const { return RegionPiece{0, &surface, &patch, &plain, &rig}; }
+  RegionPiece piece(const InfluenceSet* full = nullptr) const { return RegionPiece{0, &surface, &patch, &plain, &rig, full}; }
 };
 
 }  // namespace
@@ -90,6 +90,17 @@ TEST_CASE("region loss place: the vertex the rig pulls in is named, with its sha
   // vertex's move changes the volume linearly: its triangles' cones are linear in it).
   CHECK(place.first_order_points == Approx(exact).epsilon(1e-9));
   CHECK(place.points == Approx(-exact).epsilon(1e-9));
+  // Without the weights before the cut (validate's case) the cut's share is not known; with them it is
+  // the rig's volume less theirs: all of the loss when they are plain skinning's, none when the cut
+  // changed nothing.
+  CHECK_FALSE(place.cut_measured);
+  const RegionLossPlace cut_all = regionLossPlace(scene.character, {scene.piece(&scene.plain)}, frame, scene.bind_volume, 0.5, &scratch);
+  CHECK(cut_all.cut_measured);
+  CHECK(cut_all.cut_points == Approx(exact).epsilon(1e-12));
+  CHECK(cut_all.difference_points == place.difference_points);
+  const RegionLossPlace cut_none = regionLossPlace(scene.character, {scene.piece(&scene.rig)}, frame, scene.bind_volume, 0.5, &scratch);
+  CHECK(cut_none.cut_measured);
+  CHECK(cut_none.cut_points == 0.0);
 
   // Pushed out instead, nothing is taken: no place.
   frame[1] = Eigen::Affine3d(Eigen::Translation3d(-in));
