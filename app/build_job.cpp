@@ -48,6 +48,7 @@ std::string bakeOnlyOptions(const BuildCharacter& character) {
   if (character.fit_roughness_cap != ResponseFitOptions{}.roughness_cap)
     text += " fit_roughness_cap " + std::to_string(character.fit_roughness_cap);
   if (character.fit_occupied_volume) text += " fit_volume occupied";
+  if (character.fit_every_frame_regions) text += " fit_regions every-frame";
   if (character.stats) text += " stats";
   if (character.packed) text += " packed";
   return text;
@@ -146,6 +147,7 @@ BakeRequest bakeRequestOf(const BuildManifest& manifest, const BuildCharacter& c
   options.fit.smoothness_weight = character.fit_smoothness;
   options.fit.roughness_cap = character.fit_roughness_cap;
   options.fit.occupied_volume = character.fit_occupied_volume;
+  options.fit.every_frame_regions = character.fit_every_frame_regions;
   options.motion = character.muscle_motion;
   options.helper_joints = character.helper_joints;
   options.measure_skin = character.stats;  // only the stats show them (pipeline/bake.h)

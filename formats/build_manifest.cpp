@@ -61,7 +61,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
   nlohmann::json json = readJsonFile(path);
   JsonReader in(json, path, "", errc::MANIFEST_INVALID);
   in.allowKeys({"$schema", "preset", "influences", "gltf_weights", "rom", "muscle_motion", "helper_joints", "response", "vrm",
-                "map", "regions", "jiggle", "hits", "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "stats",
+                "map", "regions", "jiggle", "hits", "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "fit_regions", "stats",
                 "packed", "out", "characters"});
   BuildManifest manifest;
   manifest.file = path;
@@ -166,6 +166,12 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     return volume == "occupied";
   };
   if (in.has("fit_volume")) manifest.fit_occupied_volume = occupiedOf(in.at("fit_volume"));
+  auto everyFrameOf = [](const JsonReader& value) {
+    const std::string regions = value.asString();
+    if (regions != "fitted-poses" && regions != "every-frame") value.fail("must be \"fitted-poses\" or \"every-frame\"");
+    return regions == "every-frame";
+  };
+  if (in.has("fit_regions")) manifest.fit_every_frame_regions = everyFrameOf(in.at("fit_regions"));
   if (in.has("stats")) manifest.stats = in.at("stats").asBool();
   if (in.has("packed")) manifest.packed = in.at("packed").asBool();
   auto outOf = [](const JsonReader& value) {
@@ -181,7 +187,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     JsonReader item = characters.at(i);
     item.allowKeys({"name", "input", "muscles_from", "muscles", "preset", "influences", "gltf_weights", "rom",
                     "muscle_motion", "helper_joints", "response", "vrm", "map", "regions", "jiggle", "hits",
-                    "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "stats", "packed"});
+                    "vrm_springs_only", "fps", "fit_poses", "fit_smoothness", "fit_roughness_cap", "fit_volume", "fit_regions", "stats", "packed"});
     BuildCharacter c;
     c.pointer = item.pointer();
     c.name = item.at("name").asString();
@@ -216,6 +222,7 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     c.fit_smoothness = item.has("fit_smoothness") ? smoothnessOf(item.at("fit_smoothness")) : manifest.fit_smoothness;
     c.fit_roughness_cap = item.has("fit_roughness_cap") ? roughnessCapOf(item.at("fit_roughness_cap")) : manifest.fit_roughness_cap;
     c.fit_occupied_volume = item.has("fit_volume") ? occupiedOf(item.at("fit_volume")) : manifest.fit_occupied_volume;
+    c.fit_every_frame_regions = item.has("fit_regions") ? everyFrameOf(item.at("fit_regions")) : manifest.fit_every_frame_regions;
     c.stats = item.has("stats") ? item.at("stats").asBool() : manifest.stats;
     c.packed = item.has("packed") ? item.at("packed").asBool() : manifest.packed;
     // Hits kick jiggle joints, and spring bones are jiggles: neither means anything without a jiggle.

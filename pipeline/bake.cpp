@@ -282,6 +282,9 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
     failOption("fit_smoothness", "must be from 0 to 1000000 per metre of a 1.8 m body");
   if (!(options.fit.roughness_cap == 0.0 || (options.fit.roughness_cap >= 1.0 && options.fit.roughness_cap <= 100.0)))
     failOption("fit_roughness_cap", "must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
+  // The occupied fit's exposure is per vertex and fitted pose: at every frame it would not fit in memory.
+  if (options.fit.every_frame_regions && options.fit.occupied_volume)
+    failOption("fit_regions", "every-frame cannot be combined with the occupied-volume fit");
   for (const MusclePart& part : muscles.parts) {
     std::string problem = musclePartProblem(part, skeleton);
     if (!problem.empty()) fail(errc::MUSCLES_MISMATCH, muscles.character, part.fullName() + ": " + problem);
@@ -302,17 +305,38 @@ BakeResult bakeCharacter(const Character& character, const MuscleSet& muscles, c
 
   MuscleWeights weights = weighMuscles(character, muscles, options, &result);
   timing.weights += lap();
-  fitResponses(character, options, weights.measured, &result);
-  timing.fit = lap();
-  const runtime::MuscleRig<double> rig = buildMuscleRig(result.muscles, skeleton);
-  reportProgress(options.progress, "sampling every clip");
-  bakeMuscleJoints(skeleton, rig, &result);
-  std::vector<std::vector<SkinFrame>> clip_frames = sampleBakedClips(character, rig, options, &result);
-  timing.evaluate = lap();
   result.gltf_weights = options.gltf_weights;
   RoundedWeights rounded;
-  roundWeights(character, options, weights, &clip_frames, &weights.measured, lap, &timing, &rounded, &result);
-  timing.weights += lap();
+  std::vector<std::vector<SkinFrame>> clip_frames;
+  // Samples every clip with the muscles' response as it stands (their joints and the frames the
+  // rounding and the figures read).
+  auto sampleClips = [&]() {
+    const runtime::MuscleRig<double> rig = buildMuscleRig(result.muscles, skeleton);
+    reportProgress(options.progress, "sampling every clip");
+    result.joints.clear();
+    result.skinned_joint_of_muscle.clear();
+    result.clips.clear();
+    bakeMuscleJoints(skeleton, rig, &result);
+    clip_frames = sampleBakedClips(character, rig, options, &result);
+    timing.evaluate += lap();
+  };
+  if (options.fit.every_frame_regions) {
+    // The weights are cut and rounded first, following the preset's response, and the fit keeps the
+    // regions on them (docs/deformation-quality.md, "Every region at every frame"); then the clips are
+    // sampled again with the fitted response.
+    sampleClips();
+    roundWeights(character, options, weights, &clip_frames, &weights.measured, lap, &timing, &rounded, &result);
+    timing.weights += lap();
+    fitResponses(character, options, weights.measured, &result);
+    timing.fit = lap();
+    sampleClips();
+  } else {
+    fitResponses(character, options, weights.measured, &result);
+    timing.fit = lap();
+    sampleClips();
+    roundWeights(character, options, weights, &clip_frames, &weights.measured, lap, &timing, &rounded, &result);
+    timing.weights += lap();
+  }
   measureBakeFigures(character, options, body_height, weights.measured, rounded, clip_frames, lap, &timing, &result);
   reportProgress(options.progress, "packing the weights");
   packWeights(options, &rounded, &result);
@@ -384,15 +408,27 @@ void fitResponses(const Character& character, const BakeOptions& options, const 
   } else {
     features.resize(samples.size());
   }
-  std::vector<Pose> poses;
-  for (size_t i : chooseFitPoses(features, wanted)) poses.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
+  std::vector<char> fitted(samples.size(), 0);
+  std::vector<Pose> poses, checked;
+  for (size_t i : chooseFitPoses(features, wanted)) {
+    fitted[i] = 1;
+    poses.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
+  }
+  // With every_frame_regions, each frame the fit does not take is checked after it; beyond
+  // kMaxCheckedFrames frames, every k-th (farthest-point sampling over more would cost more than the fit).
+  if (options.fit.every_frame_regions) {
+    constexpr size_t kMaxCheckedFrames = 4096;
+    const size_t stride = (samples.size() + kMaxCheckedFrames - 1) / kMaxCheckedFrames;
+    for (size_t i = 0; i < samples.size(); i += stride)
+      if (!fitted[i]) checked.push_back(sampleClip(skeleton, character.clips[samples[i].first], samples[i].second));
+  }
   // The prior keeps the weight it has against every frame (up to prior_poses of them) when the fit
   // takes fewer.
   ResponseFitOptions fit_options = options.fit;
   if (!fit_options.progress) fit_options.progress = options.progress;
   fit_options.pose_weight =
       static_cast<double>(std::min(samples.size(), static_cast<size_t>(std::max(1, fit_options.prior_poses)))) / poses.size();
-  result->fit = fitMuscleResponses(character, options.regions, measured, poses, fit_part, &result->muscles, fit_options, options.threads);
+  result->fit = fitMuscleResponses(character, options.regions, measured, poses, checked, fit_part, &result->muscles, fit_options, options.threads);
 }
 
 void bakeMuscleJoints(const Skeleton& skeleton, const runtime::MuscleRig<double>& rig, BakeResult* result) {

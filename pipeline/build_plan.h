@@ -36,6 +36,7 @@ struct BuildCharacter {
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
   double fit_roughness_cap = ResponseFitOptions{}.roughness_cap;
   bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;  // "fit_volume": "occupied"
+  bool fit_every_frame_regions = ResponseFitOptions{}.every_frame_regions;  // "fit_regions": "every-frame"
   bool stats = false;        // also write OUT/NAME/stats.json
   bool packed = false;       // also write OUT/NAME/NAME.rbpk
   std::string pointer;       // JSON pointer in the manifest, for messages
@@ -59,6 +60,7 @@ struct BuildManifest {
   double fit_smoothness = ResponseFitOptions{}.smoothness_weight;
   double fit_roughness_cap = ResponseFitOptions{}.roughness_cap;
   bool fit_occupied_volume = ResponseFitOptions{}.occupied_volume;
+  bool fit_every_frame_regions = ResponseFitOptions{}.every_frame_regions;
   bool stats = false, packed = false;
   std::string out;        // output root, resolved
   std::vector<BuildCharacter> characters;

@@ -35,9 +35,10 @@ struct RegionLossPlace {
   double time = 0.0;                // the sample, seconds into the clip
   // Where the pieces carry the weights as the bake made them before writing them (RegionPiece::full):
   // the rig's volume with the written weights minus with those, exactly (points; negative where the cut
-  // to the written influence count and the 0.001 rounding lose volume). The fit keeps the regions with the
-  // full weights, so this is the part of the loss it could not see (docs/deformation-quality.md, "Where a
-  // region loses it"). validate has only the written weights: cut_measured stays false.
+  // to the written influence count and the 0.001 rounding lose volume). By default the fit keeps the
+  // regions with the weights before the cut, so this is the part of the loss it could not see
+  // (docs/deformation-quality.md, "Where a region loses it"). validate has only the written weights:
+  // cut_measured stays false.
   bool cut_measured = false;
   double cut_points = 0.0;
 };

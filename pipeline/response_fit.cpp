@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <numeric>
 #include <set>
 #include <string>
 
@@ -124,6 +125,7 @@ struct FitProblem {
   const FixedPieces& fixed;
   double compressed_limit, hollow_limit, skin_band;  // metres
   double skin_weight;  // options.skin_weight x kReferenceBodyHeight / body height: per metre of this body
+  double region_weight;  // the regions' rows: options.region_weight, or every_frame_region_weight
   // Per fit part, the one-ring of each moving vertex over the whole surface's moving piece; empty
   // when there is neither the smoothness term nor the roughness cap.
   const std::vector<std::vector<std::vector<int>>>& rings;
@@ -148,6 +150,7 @@ struct PoseRows {
   double rough_square = 0.0;
   double body_square = 0.0;
   double violation = 0.0;  // the violated hinges' squares, candidates or not
+  double region_excess = 0.0;  // how far the lowest region is below its dead zone (a fraction of its bind volume)
 };
 
 // Builds one pose's rows at a time on one worker's scratch. A row's Jacobian is sum over its vertices v
@@ -395,9 +398,10 @@ void PoseRowBuilder::addRegionHinges(const std::vector<double>& region_volume, b
     const double input_change = problem_.fixed.input_region_change[pose_][r];
     const double lower = std::min(input_change, 0.0) - options.region_margin;
     const double upper = std::max(input_change, 0.0) + options.region_gain;
-    const double weight = options.region_weight / std::abs(bind);
-    const double below = options.region_weight * (change - lower), above = options.region_weight * (upper - change);
+    const double weight = problem_.region_weight / std::abs(bind);
+    const double below = problem_.region_weight * (change - lower), above = problem_.region_weight * (upper - change);
     out->violation += std::pow(std::min(below, 0.0), 2) + std::pow(std::min(above, 0.0), 2);
+    out->region_excess = std::max(out->region_excess, lower - change);
     const bool near_lower = change - lower < options.region_band, near_upper = upper - change < options.region_band;
     if (!near_lower && !near_upper) continue;
     Eigen::VectorXd jacobian;
@@ -630,15 +634,15 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
   if (problem_.cap_scale > 0.0) addRoughnessCap(measure_only, out);
 }
 
-// Every pose's rows at the muscles' current responses, joined in pose order, on `threads` threads; the
-// root mean square of the body's change into *rms.
-HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& poses, bool measure_only, int threads,
-                            std::vector<PoseScratch>* scratch, double* rms) {
+// Every active pose's rows (`active`: indices into `poses`, ascending) at the muscles' current responses,
+// joined in that order, on `threads` threads; the root mean square of the body's change into *rms.
+HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& poses, const std::vector<size_t>& active,
+                            bool measure_only, int threads, std::vector<PoseScratch>* scratch, double* rms) {
   const runtime::MuscleRig<double> rig = buildMuscleRig(problem.muscles, problem.skeleton);
-  std::vector<PoseRows> pose_rows(poses.size());
-  parallelForWorkers(threads, poses.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
+  std::vector<PoseRows> pose_rows(active.size());
+  parallelForWorkers(threads, active.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
     PoseRowBuilder builder(problem, &(*scratch)[worker]);
-    for (size_t i = chunk_begin; i < chunk_end; ++i) builder.build(rig, poses[i], i, measure_only, &pose_rows[i]);
+    for (size_t i = chunk_begin; i < chunk_end; ++i) builder.build(rig, poses[active[i]], active[i], measure_only, &pose_rows[i]);
   });
   HingeEvaluation evaluation;
   HingeLinearModel& model = evaluation.model;
@@ -677,8 +681,25 @@ HingeEvaluation evaluateFit(const FitProblem& problem, const std::vector<Pose>& 
       model.rhs.push_back(-v.dot(rough_gradient) / std::sqrt(l));
     }
   }
-  *rms = std::sqrt(body_squares / static_cast<double>(poses.size()));
+  *rms = std::sqrt(body_squares / static_cast<double>(active.size()));
   return evaluation;
+}
+
+// At each of `checked`'s poses, how far its lowest region is below its dead zone at the muscles' current
+// responses (0 when every region is within it).
+std::vector<double> regionExcess(const FitProblem& problem, const std::vector<Pose>& poses, const std::vector<size_t>& checked,
+                                 int threads, std::vector<PoseScratch>* scratch) {
+  const runtime::MuscleRig<double> rig = buildMuscleRig(problem.muscles, problem.skeleton);
+  std::vector<double> excess(checked.size(), 0.0);
+  parallelForWorkers(threads, checked.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
+    PoseRowBuilder builder(problem, &(*scratch)[worker]);
+    for (size_t i = chunk_begin; i < chunk_end; ++i) {
+      PoseRows rows;
+      builder.build(rig, poses[checked[i]], checked[i], true, &rows);
+      excess[i] = rows.region_excess;
+    }
+  });
+  return excess;
 }
 
 }  // namespace
@@ -695,41 +716,6 @@ std::vector<double> driverFeatures(const runtime::MuscleRig<double>& rig, const 
   return features;
 }
 
-std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& features, size_t count) {
-  const size_t n = features.size();
-  std::vector<size_t> chosen;
-  if (n <= count) {
-    for (size_t i = 0; i < n; ++i) chosen.push_back(i);
-    return chosen;
-  }
-  auto squaredDistance = [](const std::vector<double>& a, const std::vector<double>& b) {
-    double sum = 0.0;
-    for (size_t k = 0; k < a.size(); ++k) sum += (a[k] - b[k]) * (a[k] - b[k]);
-    return sum;
-  };
-  // Distance to the nearest pose taken; rest (all features zero) counts as taken, so the first pose is
-  // the one farthest from it. Ties go to the earlier candidate, and distances within kTieTolerance of
-  // each other tie: the features carry the last bits of sums over the skin, which change with the
-  // vertices' order, and one pose taken elsewhere moved a region of the fitted Male Casual by 1.6 points.
-  constexpr double kTieTolerance = 1e-9;
-  std::vector<double> nearest(n, 0.0);
-  for (size_t i = 0; i < n; ++i) {
-    for (double f : features[i]) nearest[i] += f * f;
-  }
-  std::vector<char> taken(n, 0);
-  for (size_t c = 0; c < count; ++c) {
-    size_t next = n;
-    for (size_t i = 0; i < n; ++i) {
-      if (!taken[i] && (next == n || nearest[i] > nearest[next] * (1.0 + kTieTolerance))) next = i;
-    }
-    taken[next] = 1;
-    chosen.push_back(next);
-    for (size_t i = 0; i < n; ++i) nearest[i] = std::min(nearest[i], squaredDistance(features[i], features[next]));
-  }
-  std::sort(chosen.begin(), chosen.end());
-  return chosen;
-}
-
 bool hasPresetResponse(const MusclePart& part) {
   const MuscleResponse preset = defaultResponse(part);
   auto same = [](const std::vector<ResponseKey>& a, const std::vector<ResponseKey>& b) {
@@ -744,14 +730,14 @@ bool hasPresetResponse(const MusclePart& part) {
 
 
 ResponseFitReport fitMuscleResponses(const Character& character, const std::vector<BodyRegion>& regions,
-                                     const std::vector<MeasuredPart>& parts, const std::vector<Pose>& poses,
-                                     const std::vector<char>& fit, MuscleSet* muscles, const ResponseFitOptions& options,
-                                     int threads) {
+                                     const std::vector<MeasuredPart>& parts, const std::vector<Pose>& fit_poses,
+                                     const std::vector<Pose>& check_poses, const std::vector<char>& fit, MuscleSet* muscles,
+                                     const ResponseFitOptions& options, int threads) {
   const Skeleton& skeleton = character.skeleton;
   const size_t muscle_count = muscles->parts.size();
   assert(fit.size() == muscle_count);
   ResponseFitReport report;
-  report.poses = static_cast<int>(poses.size());
+  report.poses = static_cast<int>(fit_poses.size());
   std::set<std::string> kind_names;
   for (size_t m = 0; m < muscle_count; ++m) {
     if (!fit[m]) continue;
@@ -759,15 +745,19 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
     ++report.fitted_parts;
   }
   report.parameters = static_cast<int>(kind_names.size()) * kKeys;
-  if (report.parameters == 0 || poses.empty()) return report;
+  if (report.parameters == 0 || fit_poses.empty()) return report;
 
-  // The drivers at every pose do not depend on the response: the keys are placed where they take the
-  // muscles before anything is fitted.
-  std::vector<std::vector<runtime::MuscleDrivers<double>>> pose_drivers(poses.size());
+  // The drivers at every fitted pose do not depend on the response: the keys are placed where they take
+  // the muscles before anything is fitted.
+  std::vector<std::vector<runtime::MuscleDrivers<double>>> pose_drivers(fit_poses.size());
   {
     const runtime::MuscleRig<double> rig = buildMuscleRig(*muscles, skeleton);
-    for (size_t i = 0; i < poses.size(); ++i) pose_drivers[i] = evaluateRig(rig, poses[i], false).drivers;
+    for (size_t i = 0; i < fit_poses.size(); ++i) pose_drivers[i] = evaluateRig(rig, fit_poses[i], false).drivers;
   }
+  // The fitted poses, then the checked ones: the fixed pieces are measured at all of them at once.
+  std::vector<Pose> poses = fit_poses;
+  if (options.every_frame_regions && options.region_check_rounds > 0 && options.region_check_poses > 0 && !options.occupied_volume)
+    poses.insert(poses.end(), check_poses.begin(), check_poses.end());
   const ResponseLayout layout = layoutResponses(*muscles, fit, pose_drivers);
   assert(layout.unknowns() == report.parameters);
   const Eigen::VectorXd talk = talkAmplitudes(layout, *muscles);
@@ -775,7 +765,9 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   FitSurfaces surfaces = buildFitSurfaces(character, regions, parts, *muscles, layout.kind, frames.bind_inverse, threads);
 
   const char* const kStage = "fitting the muscles' response";
-  const int passes = options.iterations + 2;
+  const bool checking = poses.size() > fit_poses.size();
+  const int solve_passes = options.iterations + 1;
+  const int passes = 1 + solve_passes + (checking ? options.region_check_rounds * (1 + solve_passes) : 0);
   reportProgress(options.progress, kStage, 0, passes);
   applyAmplitudes(layout, talk, muscles);
   const FixedPieces fixed = measureFixedPieces(skeleton, poses, buildMuscleRig(*muscles, skeleton), frames.bind_inverse,
@@ -786,7 +778,11 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // over every third frame balances its terms as one over every frame would.
   HingePrior prior;
   prior.target = talk;
-  prior.weight = options.prior_weight / std::sqrt(std::max(options.pose_weight, 1e-6));
+  auto priorWeight = [&](size_t active_poses) {
+    const double pose_weight = options.pose_weight * static_cast<double>(fit_poses.size()) / static_cast<double>(active_poses);
+    return options.prior_weight / std::sqrt(std::max(pose_weight, 1e-6));
+  };
+  prior.weight = priorWeight(fit_poses.size());
   const std::vector<double> reach = keyReach(layout, *muscles, pose_drivers);
   prior.scale.resize(layout.unknowns());
   for (int u = 0; u < layout.unknowns(); ++u) prior.scale[u] = std::max(reach[u], 1e-3);
@@ -820,15 +816,19 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   }
   const FitProblem problem{skeleton, *muscles, layout, options, frames, surfaces, fixed,
                            options.compressed_in_share * muscles->body_height, options.stretch_hollow_share * muscles->body_height,
-                           options.skin_band_share * muscles->body_height, options.skin_weight * per_height, rings, roughness_scale,
+                           options.skin_band_share * muscles->body_height, options.skin_weight * per_height,
+                           options.every_frame_regions ? options.every_frame_region_weight : options.region_weight, rings, roughness_scale,
                            cap_scale, kRoughnessFloorPerHeight * muscles->body_height, input_rise};
   std::vector<PoseScratch> scratch(parallelWorkerCount(threads, poses.size(), kPosesPerChunk));
   for (PoseScratch& worker : scratch) worker = poseScratch(surfaces.parts, muscle_count);
   std::vector<double> rms(static_cast<size_t>(options.iterations) + 1, 0.0);
+  std::vector<size_t> active(fit_poses.size());
+  std::iota(active.begin(), active.end(), size_t{0});
+  int passes_done = 1;
   auto evaluate = [&](const Eigen::VectorXd& amplitudes, int evaluation, bool measure_only) {
-    reportProgress(options.progress, kStage, 1 + evaluation, passes);
+    reportProgress(options.progress, kStage, passes_done + evaluation, passes);
     applyAmplitudes(layout, amplitudes, muscles);
-    return evaluateFit(problem, poses, measure_only, threads, &scratch, &rms[static_cast<size_t>(evaluation)]);
+    return evaluateFit(problem, poses, active, measure_only, threads, &scratch, &rms[static_cast<size_t>(evaluation)]);
   };
   HingeSolveOptions solve;
   solve.iterations = options.iterations;
@@ -836,9 +836,38 @@ ResponseFitReport fitMuscleResponses(const Character& character, const std::vect
   // Measured on the mannequin, VRM 1.0, CesiumMan and Cyberpunk: the hinges' active set settles after 1
   // to 7 re-solves; three of the four fits reach the cap once, and that step is taken as it stands.
   solve.hinge_passes = 8;
-  const HingeSolveResult result = solveHingeLeastSquares(talk, prior, amplitudeBounds(layout, talk, options), evaluate, solve);
+  const HingeBounds bounds = amplitudeBounds(layout, talk, options);
+  HingeSolveResult result = solveHingeLeastSquares(talk, prior, bounds, evaluate, solve);
   report.body_rms_before = rms[0];
   report.body_rms_after = result.best_evaluation >= 0 ? rms[static_cast<size_t>(result.best_evaluation)] : 0.0;
+  // The checked poses: where a region falls below its dead zone by more than region_check_tolerance at
+  // one the fit did not see, the worst of them join the fit and it goes on from where it was.
+  for (int round = 0; checking && round < options.region_check_rounds; ++round) {
+    passes_done += solve_passes;
+    reportProgress(options.progress, kStage, passes_done, passes);
+    ++passes_done;
+    applyAmplitudes(layout, result.theta, muscles);
+    std::vector<size_t> unseen;
+    for (size_t i = fit_poses.size(), a = 0; i < poses.size(); ++i) {
+      while (a < active.size() && active[a] < i) ++a;
+      if (a == active.size() || active[a] != i) unseen.push_back(i);
+    }
+    const std::vector<double> excess = regionExcess(problem, poses, unseen, threads, &scratch);
+    std::vector<size_t> order;
+    for (size_t k = 0; k < unseen.size(); ++k)
+      if (excess[k] > options.region_check_tolerance) order.push_back(k);
+    if (order.empty()) break;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return excess[a] > excess[b]; });
+    order.resize(std::min(order.size(), static_cast<size_t>(options.region_check_poses)));
+    for (size_t k : order) active.push_back(unseen[k]);
+    std::sort(active.begin(), active.end());
+    report.added_poses += static_cast<int>(order.size());
+    prior.weight = priorWeight(active.size());
+    const HingeSolveResult next = solveHingeLeastSquares(result.theta, prior, bounds, evaluate, solve);
+    if (next.best_evaluation >= 0) report.body_rms_after = rms[static_cast<size_t>(next.best_evaluation)];
+    result = next;
+  }
+  if (checking) reportProgress(options.progress, kStage, passes, passes);
   applyAmplitudes(layout, result.theta, muscles);
   return report;
 }

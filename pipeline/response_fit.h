@@ -14,6 +14,7 @@
 #include "anatomy/character.h"
 #include "anatomy/muscle_set.h"
 #include "pipeline/deformation_quality.h"
+#include "pipeline/fit_pose_choice.h"
 #include "pipeline/pose.h"
 #include "pipeline/progress.h"
 #include "runtime/muscle_rig.h"
@@ -102,6 +103,20 @@ struct ResponseFitOptions {
   double min_twist_amplitude = 0.0;
   // A corrective's keys: [-max, max] x its offset (the preset's bulge vector), either way.
   double max_corrective_amplitude = 4.0;
+  // The regions at every frame (`bake --fit-regions every-frame`; docs/deformation-quality.md, "Every
+  // region at every frame"): the bake cuts the weights to the written influence count and rounds them
+  // before the fit, so that the fit keeps the regions on the weights written, and after the fit the
+  // checked poses (every clip frame the fit did not take) are measured: up to region_check_poses of them
+  // where a region is furthest below its dead zone, by more than region_check_tolerance (a fraction of
+  // its bind volume), join the fitted poses and the fit goes on from where it was, at most
+  // region_check_rounds times; the regions' rows weigh every_frame_region_weight instead of
+  // region_weight. Not with occupied_volume (its exposure is per vertex and pose: every frame's would
+  // not fit in memory).
+  bool every_frame_regions = false;
+  int region_check_rounds = 2;
+  int region_check_poses = 16;
+  double region_check_tolerance = 0.0025;
+  double every_frame_region_weight = 100.0;
 };
 
 struct ResponseFitReport {
@@ -111,30 +126,24 @@ struct ResponseFitReport {
   // Root mean square of the whole-body volume change over the fitted poses, before and after.
   double body_rms_before = 0.0;
   double body_rms_after = 0.0;
+  int added_poses = 0;  // checked poses that joined the fit
 };
 
 // Fits the response of every part with fit[m] set (parts of the same name on both sides share one
 // set of keys, mirrored); the others keep theirs and are evaluated as they are. `parts` holds each
 // skinned part's input weights and its muscle-added full-precision weights (muscle m is joint
-// skeleton.size() + m); every part's carrier must be chosen. `poses` are the poses to fit over, on
+// skeleton.size() + m); every part's carrier must be chosen. `fit_poses` are the poses to fit over,
+// `check_poses` those to check the regions at afterwards with every_frame_regions (else unused), on
 // `threads` threads (pipeline/parallel.h; the result is the same at any count).
 ResponseFitReport fitMuscleResponses(const Character& character, const std::vector<BodyRegion>& regions,
-                                     const std::vector<MeasuredPart>& parts, const std::vector<Pose>& poses,
-                                     const std::vector<char>& fit, MuscleSet* muscles,
+                                     const std::vector<MeasuredPart>& parts, const std::vector<Pose>& fit_poses,
+                                     const std::vector<Pose>& check_poses, const std::vector<char>& fit, MuscleSet* muscles,
                                      const ResponseFitOptions& options = {}, int threads = 1);
 
 // Where a pose puts the fitted parts' drivers (fit[m] set): each one's clamped length ratio and its
 // twist in quarter turns, the quantities the response keys are read at. For chooseFitPoses().
 std::vector<double> driverFeatures(const runtime::MuscleRig<double>& rig, const MuscleSet& muscles,
                                    const std::vector<char>& fit, const Pose& pose);
-
-// `count` of the candidate poses (their driverFeatures()) for the fit, spread over the drivers'
-// range by farthest-point sampling: first the pose farthest from rest, then each time the one farthest
-// from every pose taken; distances within a relative 1e-9 tie, and a tie goes to the earlier candidate
-// (the same poses whatever the last bits of the features). Returned ascending (the candidates' order);
-// all of them when there are no more than `count`. Even spacing in time leaves a brief extreme pose (a roll, a fall) between two
-// samples; this takes the extremes first.
-std::vector<size_t> chooseFitPoses(const std::vector<std::vector<double>>& features, size_t count);
 
 // True when `part` still has the response its preset gives it (defaultResponse()): what
 // `bake --response auto` fits. Curves that were fitted before or edited by hand are kept.

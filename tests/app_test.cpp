@@ -70,6 +70,10 @@ TEST_CASE("app: bakeJob names a bad option by its field, never by a command-line
   request.options.fit.roughness_cap = std::numeric_limits<double>::quiet_NaN();
   CHECK(invalidOption(request) == "fit_roughness_cap: must be 0 (no cap) or from 1 to 100 times plain skinning's roughness rise");
   request = quickSampleBake();
+  request.options.fit.every_frame_regions = true;
+  request.options.fit.occupied_volume = true;
+  CHECK(invalidOption(request) == "fit_regions: every-frame cannot be combined with the occupied-volume fit");
+  request = quickSampleBake();
   request.hits = test::presetsDir() + "/jiggle/biceps.json";  // never read: the check comes first
   CHECK(invalidOption(request) == "hits: needs a jiggle preset: hits kick jiggle joints");
   request = quickSampleBake();

@@ -332,6 +332,9 @@ TEST_CASE("cli build: a malformed manifest is MANIFEST_INVALID with its JSON poi
        "#/characters/0/fit_roughness_cap"},
       {{{"out", "out"}, {"fit_volume", "area"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}}, "#/fit_volume"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_volume", true}}}}}, "#/characters/0/fit_volume"},
+      {{{"out", "out"}, {"fit_regions", "all"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}}}}},
+       "#/fit_regions: must be \"fitted-poses\" or \"every-frame\""},
+      {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fit_regions", 1}}}}}, "#/characters/0/fit_regions"},
       {{{"out", "out"}, {"characters", {{{"name", "a"}, {"input", "hero.glb"}, {"fps", -1}}}}}, "#/characters/0/fps"},
   };
   for (const Case& c : cases) {
@@ -520,7 +523,8 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
          {"fps", 20}, {"response", "fit"}, {"fit_poses", 4}, {"fit_smoothness", 500}, {"fit_roughness_cap", 1.5},
          {"fit_volume", "occupied"}},
         {{"name", "springy"}, {"input", "hero1.vrm"}, {"vrm_springs_only", true}},
-        {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}}}}};
+        {{"name", "plain"}, {"input", "hero.glb"}, {"vrm_springs_only", true}},
+        {{"name", "regions"}, {"input", "hero.glb"}, {"influences", 4}, {"response", "auto"}, {"fit_regions", "every-frame"}}}}};
   std::ofstream(dir / "manifest.json") << manifest.dump(2);
   const test::CliResult build = runCli("build -j 2 " + ext::shellQuote(dir / "manifest.json"));
   INFO(build.err);
@@ -542,7 +546,8 @@ TEST_CASE("cli build: a character bakes with bake's map, regions, jiggle, hits, 
   bake("hero.glb", "hero", "--influences 4 --map gow --regions body --hits " + ext::shellQuote(dir / "hits.json") +
                                " --fps 20 --response fit --fit-poses 4 --fit-smoothness 500 --fit-roughness-cap 1.5 --fit-volume occupied");
   bake("hero1.vrm", "springy", "--vrm-springs-only --response keep --influences 10");  // build's default: 10
-  for (const std::string name : {"hero", "springy"}) {
+  bake("hero.glb", "regions", "--influences 4 --fit-regions every-frame");
+  for (const std::string name : {"hero", "springy", "regions"}) {
     INFO(name);
     const std::string built = dir / ("out/" + name + "/");
     CHECK(slurp(built + name + ".glb") == slurp(bake_dir + "/" + name + ".glb"));
