@@ -81,8 +81,6 @@ void printRoughness(const BakeCommandOptions& options, const BakeResult& bake) {
   }
 }
 
-// The figures on stderr: the bake, its error and where it peaks, volumes, roughness, creases, seams,
-// legs, jiggles and VRM constraints.
 // The body region that loses most beyond plain skinning over every clip, where, and how much of it the
 // cut to --influences makes.
 void printRegionLine(const BakeCommandOptions& options, const BakeResult& bake) {
@@ -119,6 +117,8 @@ void printRegionLine(const BakeCommandOptions& options, const BakeResult& bake) 
   }
 }
 
+// The figures on stderr: the bake, its error and where it peaks, volumes, roughness, creases, seams,
+// legs, jiggles and VRM constraints.
 void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out) {
   const Character& character = out.character.loaded.character;
   const BakeResult& bake = out.bake;
