@@ -160,17 +160,15 @@ BuildManifest readBuildManifest(const std::string& path, const std::string& defa
     return cap;
   };
   if (in.has("fit_roughness_cap")) manifest.fit_roughness_cap = roughnessCapOf(in.at("fit_roughness_cap"));
-  auto occupiedOf = [](const JsonReader& value) {
-    const std::string volume = value.asString();
-    if (volume != "signed" && volume != "occupied") value.fail("must be \"signed\" or \"occupied\"");
-    return volume == "occupied";
+  // A setting of two names: true for `on`, false for `off`, anything else refused naming both.
+  auto eitherOf = [](const JsonReader& value, const std::string& off, const std::string& on) {
+    const std::string name = value.asString();
+    if (name != off && name != on) value.fail("must be \"" + off + "\" or \"" + on + "\"");
+    return name == on;
   };
+  auto occupiedOf = [&](const JsonReader& value) { return eitherOf(value, "signed", "occupied"); };
   if (in.has("fit_volume")) manifest.fit_occupied_volume = occupiedOf(in.at("fit_volume"));
-  auto everyFrameOf = [](const JsonReader& value) {
-    const std::string regions = value.asString();
-    if (regions != "fitted-poses" && regions != "every-frame") value.fail("must be \"fitted-poses\" or \"every-frame\"");
-    return regions == "every-frame";
-  };
+  auto everyFrameOf = [&](const JsonReader& value) { return eitherOf(value, "fitted-poses", "every-frame"); };
   if (in.has("fit_regions")) manifest.fit_every_frame_regions = everyFrameOf(in.at("fit_regions"));
   if (in.has("stats")) manifest.stats = in.at("stats").asBool();
   if (in.has("packed")) manifest.packed = in.at("packed").asBool();
