@@ -163,6 +163,9 @@ class PoseRowBuilder {
     s_.sums.assign(problem.muscles.parts.size(), MuscleSums{});
   }
   void build(const runtime::MuscleRig<double>& rig, const Pose& pose, size_t pose_index, bool measure_only, PoseRows* out);
+  // How far the pose's lowest region is below its dead zone (0 when every region is within it): the
+  // regions alone, none of the other rows.
+  double regionExcess(const runtime::MuscleRig<double>& rig, const Pose& pose, size_t pose_index);
 
  private:
   void setKeyMotion(const RigEvaluation& evaluation);
@@ -172,6 +175,7 @@ class PoseRowBuilder {
   Eigen::VectorXd takeRow(double weight);
   SparseRow laplacianRow(const FitPart& part, int v, const std::vector<int>& ring, const Eigen::Vector3d& n, double weight);
   Eigen::VectorXd volumeJacobian(size_t k, double weight);
+  double measurePose(const RigEvaluation& evaluation, const Pose& pose, size_t pose_index, std::vector<double>* region_volume);
   double measureVolumes(std::vector<double>* region_volume);
   void addRegionHinges(const std::vector<double>& region_volume, bool measure_only, PoseRows* out);
   void addSkinFloorHinges(const RigEvaluation& evaluation, bool measure_only, PoseRows* out);
@@ -598,17 +602,33 @@ void PoseRowBuilder::addRoughnessCap(bool measure_only, PoseRows* out) {
 // The pose's rows: the whole body's change always (weights make volumes fractions of their bind
 // volume), the regions' and the skin floors' hinges near or past their bounds. `measure_only` leaves
 // the Jacobian rows out: the last pass's would be thrown away.
+// The pose's skinning frames at the current responses, then the body's volume (returned) and each
+// region's (into region_volume).
+double PoseRowBuilder::measurePose(const RigEvaluation& evaluation, const Pose& pose, size_t pose_index,
+                                   std::vector<double>* region_volume) {
+  pose_ = pose_index;
+  skinningFrame(problem_.skeleton, pose, evaluation, problem_.frames.bind_inverse, &s_.frame);
+  prepareFloatSkinFrame(s_.frame, problem_.surfaces.skin_centre, 0, problem_.surfaces.no_pivots, &s_.float_frame);
+  region_volume->assign(static_cast<size_t>(problem_.surfaces.region_count), 0.0);
+  return measureVolumes(region_volume);
+}
+
+double PoseRowBuilder::regionExcess(const runtime::MuscleRig<double>& rig, const Pose& pose, size_t pose_index) {
+  std::vector<double> region_volume;
+  measurePose(evaluateRig(rig, pose, false), pose, pose_index, &region_volume);
+  PoseRows rows;
+  addRegionHinges(region_volume, true, &rows);
+  return rows.region_excess;
+}
+
 void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& pose, size_t pose_index, bool measure_only,
                            PoseRows* out) {
-  pose_ = pose_index;
   const FitSurfaces& surfaces = problem_.surfaces;
   const ResponseFitOptions& options = problem_.options;
   const RigEvaluation evaluation = evaluateRig(rig, pose, false);
-  skinningFrame(problem_.skeleton, pose, evaluation, problem_.frames.bind_inverse, &s_.frame);
-  prepareFloatSkinFrame(s_.frame, surfaces.skin_centre, 0, surfaces.no_pivots, &s_.float_frame);
+  std::vector<double> region_volume;
+  const double body = measurePose(evaluation, pose, pose_index, &region_volume);
   setKeyMotion(evaluation);
-  std::vector<double> region_volume(surfaces.region_count, 0.0);
-  const double body = measureVolumes(&region_volume);
   const double body_change = signedChange(body, surfaces.bind_body);
   HingeLinearModel& model = out->model;
   out->body_square = body_change * body_change;
@@ -693,11 +713,7 @@ std::vector<double> regionExcess(const FitProblem& problem, const std::vector<Po
   std::vector<double> excess(checked.size(), 0.0);
   parallelForWorkers(threads, checked.size(), kPosesPerChunk, [&](size_t worker, size_t, size_t chunk_begin, size_t chunk_end) {
     PoseRowBuilder builder(problem, &(*scratch)[worker]);
-    for (size_t i = chunk_begin; i < chunk_end; ++i) {
-      PoseRows rows;
-      builder.build(rig, poses[checked[i]], checked[i], true, &rows);
-      excess[i] = rows.region_excess;
-    }
+    for (size_t i = chunk_begin; i < chunk_end; ++i) excess[i] = builder.regionExcess(rig, poses[checked[i]], checked[i]);
   });
   return excess;
 }
