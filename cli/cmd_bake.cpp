@@ -41,6 +41,8 @@ struct BakeCommandOptions {
   double fit_roughness_cap = rigbake::ResponseFitOptions{}.roughness_cap;
   std::string fit_volume = "signed";
   std::string fit_regions = "fitted-poses";
+  // --fit-regions every-frame: the response is fitted on the written weights (its lines say so).
+  bool fitsRegionsEveryFrame() const { return fit_regions == "every-frame"; }
   std::string muscle_motion = "runtime";
   bool helper_joints = false;
   std::string muscles_output;
@@ -105,7 +107,7 @@ void printRegionLine(const BakeCommandOptions& options, const BakeResult& bake) 
       std::cerr << ", " << regionLossPlaceText(region_clip->region_places[region]);
     // The part of it the fit did not see: the fit keeps the regions with the weights before the cut.
     // (With --fit-regions every-frame the fit keeps them with the written weights.)
-    if (options.fit_regions != "every-frame" && region < region_clip->region_places.size() &&
+    if (!options.fitsRegionsEveryFrame() && region < region_clip->region_places.size() &&
         region_clip->region_places[region].cut_measured && region_clip->region_places[region].cut_points < -0.005)
       std::cerr << "; " << fixedDecimals(-region_clip->region_places[region].cut_points, 2)
                 << " points of the loss from cutting the weights to " << bake.influences
@@ -134,7 +136,7 @@ void printFigures(const BakeCommandOptions& options, const app::BakeOutputs& out
               << 1000.0 * bake.error.overall.rms_displacement << " mm";
   // The error is against the weights before the cut under the fitted response; every-frame fits the
   // response to the written weights, so that rig is one no engine plays.
-  if (!bake.clips.empty() && options.fit_regions == "every-frame")
+  if (!bake.clips.empty() && options.fitsRegionsEveryFrame())
     std::cerr << " (against the weights before the cut, which --fit-regions every-frame did not fit the response to)";
   std::cerr << "; skin data " << skinBytesPerVertex(bake).gltf << " B/vertex as glTF, "
             << skinBytesPerVertex(bake).packed << " B/vertex packed\n";
@@ -329,7 +331,7 @@ app::BakeRequest bakeRequestOf(const BakeCommandOptions& options, const Progress
   bake.fit.smoothness_weight = options.fit_smoothness;
   bake.fit.roughness_cap = options.fit_roughness_cap;
   bake.fit.occupied_volume = options.fit_volume == "occupied";  // CLI11 has checked the name
-  bake.fit.every_frame_regions = options.fit_regions == "every-frame";
+  bake.fit.every_frame_regions = options.fitsRegionsEveryFrame();
   parseMuscleMotion(options.muscle_motion, &bake.motion);
   bake.helper_joints = options.helper_joints;
   bake.measure_skin = skinFiguresWritten(options);
