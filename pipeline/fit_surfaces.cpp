@@ -27,6 +27,18 @@ SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted)
   return out;
 }
 
+// The whole surface's triangles with no fitted vertex, closed by caps over the loops where they meet
+// the rest (and the surface's own holes among them): a closed piece, so its volume does not depend on
+// where the body stands, and no response changes it.
+ClosedPatch unreachedPiece(const VolumeSurface& surface, const std::vector<char>& fitted) {
+  std::vector<int> triangles;
+  for (size_t t = 0; t < surface.whole.triangles.size(); ++t) {
+    const std::array<int, 3>& c = surface.whole.triangles[t];
+    if (!fitted[c[0]] && !fitted[c[1]] && !fitted[c[2]]) triangles.push_back(static_cast<int>(t));
+  }
+  return closePatch(surface, triangles);
+}
+
 // What findRim() needs of the whole surface's moving piece, the same for every region: each moving
 // vertex's triangle count, whether it is on a hole, and whether its fan's far edges (b -> c for each
 // triangle (v, b, c)) close: sum (c - b) = 0 whatever the positions, checked by sorting the fan's
@@ -328,6 +340,8 @@ FitSurfaces buildFitSurfaces(const Character& character, const std::vector<BodyR
     const InfluenceSet& rig = parts[p].rig;
     WeldSlots weld = weldSlots(surface, *part.mesh, rig, joint_count, kind, bind_inverse);
     part.patches.push_back(splitPatch(surface.whole, weld.fitted));
+    part.unreached = unreachedPiece(surface, weld.fitted);
+    out.bind_unreached += enclosedVolume(part.unreached, surface.bind);
     for (const ClosedPatch& region : part.regions) part.patches.push_back(splitPatch(region, weld.fitted));
     const std::vector<int> moving_of_weld = gatherMovingVertices(surface, weld, &part);
     std::vector<MuscleVertex>().swap(weld.slots);
@@ -369,6 +383,8 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
   const size_t patch_count = s.patch_count;
   FixedPieces out;
   out.input_region_change.assign(poses.size(), std::vector<double>(region_count, 0.0));
+  out.unreached_change.assign(poses.size(), 0.0);
+  out.input_body_change.assign(poses.size(), 0.0);
   out.volume.assign(poses.size(), std::vector<FixedVolume>(s.parts.size() * patch_count));
   const OccupancyGrid grid = exposure ? fitOccupancyGrid(s) : OccupancyGrid{};
   if (grid.step > 0.0) out.exposure.resize(poses.size());
@@ -382,6 +398,7 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
     volume.assign(region_count, 0.0);
     scratch.parts_welded.resize(s.parts.size());
     std::vector<Eigen::Vector3d>& input = scratch.input;
+    double unreached = 0.0, input_body = 0.0;
     for (size_t p = 0; p < s.parts.size(); ++p) {
       const FitPart& part = s.parts[p];
       std::vector<Eigen::Vector3d>& welded = scratch.parts_welded[p];
@@ -394,6 +411,8 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
             storeSkinned(group, g, kWeldedRigSet, part.welded_of_lane, part.welded_bind, &welded);
           });
       for (int r = 0; r < region_count; ++r) volume[r] += enclosedVolume(part.regions[r], input);
+      unreached += enclosedVolume(part.unreached, welded);
+      input_body += enclosedVolume(s.measured.surfaces[p].whole, input);
       for (size_t k = 0; k < patch_count; ++k) {
         const SplitPatch& split = part.patches[k];
         if (split.first_vertex < 0) continue;
@@ -403,6 +422,8 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
       }
     }
     for (int r = 0; r < region_count; ++r) out.input_region_change[i][r] = signedChange(volume[r], s.bind_region[r]);
+    out.unreached_change[i] = (unreached - s.bind_unreached) / std::max(std::abs(s.bind_body), 1e-30);
+    out.input_body_change[i] = signedChange(input_body, s.bind_body);
     if (out.exposure.empty()) return;
     // Every part at once: skin is inside skin of any part.
     std::vector<PosedPatch> posed;
@@ -423,6 +444,7 @@ FixedPieces measureFixedPieces(const Skeleton& skeleton, const std::vector<Pose>
     std::vector<int>().swap(part.welded_of_lane);
     std::vector<Eigen::Vector3d>().swap(part.welded_bind);
     std::vector<ClosedPatch>().swap(part.regions);
+    part.unreached = ClosedPatch{};
     for (SplitPatch& split : part.patches) split.fixed = ClosedPatch{};
   }
   return out;

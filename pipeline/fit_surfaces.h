@@ -62,6 +62,7 @@ struct FitPart {
   const MeasuredPart* weights = nullptr;
   std::vector<ClosedPatch> regions;   // welded, for the input skinning's region changes
   std::vector<SplitPatch> patches;    // the whole surface, then each region
+  ClosedPatch unreached;              // welded: the triangles with no fitted vertex, closed by caps
   std::vector<int> moving_vertices;   // part vertices of the moving pieces, by moving index
   // Every moving vertex's fitted-muscle slots, one vertex after another: moving index c has
   // muscle_slots[first_share[c] .. first_share[c + 1]) (one flat list: a vector per vertex was a
@@ -111,6 +112,7 @@ struct FitSurfaces {
   int region_count = 0;  // the regions the figures measure (patches 1 .. region_count of each part)
   size_t patch_count = 1;  // the whole surface, then each region
   double bind_body = 0.0;
+  double bind_unreached = 0.0;  // the parts' unreached pieces, summed
   std::vector<double> bind_region;  // per measured region
   // Single precision about the same point as the figures skin about.
   Eigen::Vector3d skin_centre = Eigen::Vector3d::Zero();
@@ -133,10 +135,13 @@ FitSurfaces buildFitSurfaces(const Character& character, const std::vector<BodyR
 void skinningFrame(const Skeleton& skeleton, const Pose& pose, const RigEvaluation& evaluation,
                    const std::vector<Eigen::Affine3d>& bind_inverse, std::vector<Eigen::Affine3d>* frame);
 
-// What the fit does not change, per pose: the input skinning's region changes (the dead zones) and the
+// What the fit does not change, per pose: the input skinning's region changes (the dead zones), the
+// change of the skin no fitted muscle moves (FitPart::unreached, as a share of the bind body), and the
 // fixed pieces' volumes (their vertices carry no fitted muscle, so any response gives the same positions).
 struct FixedPieces {
   std::vector<std::vector<double>> input_region_change;  // [pose][region]
+  std::vector<double> unreached_change;                  // [pose]
+  std::vector<double> input_body_change;                 // [pose]: the whole body's under the input skinning
   std::vector<std::vector<FixedVolume>> volume;          // [pose][part * patch_count + patch]
   // With ResponseFitOptions::occupied_volume: per pose, part and moving vertex, the share of its skin
   // that bounds the occupied space under the starting rig (pipeline/occupied_volume.h exposedShare());

@@ -633,7 +633,14 @@ void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& po
   HingeLinearModel& model = out->model;
   out->body_square = body_change * body_change;
   const double body_weight = options.body_weight / std::max(std::abs(surfaces.bind_body), 1e-30);
-  model.rhs.push_back(-body_weight * std::abs(surfaces.bind_body) * body_change);
+  // The body's row asks the muscles for the volume of the skin they move: the loss of the skin no
+  // fitted muscle moves, down to a share of the input skinning's loss, is its target
+  // (ResponseFitOptions::spare_unreached_losses).
+  const double body_target = options.spare_unreached_losses
+                                 ? std::max(std::min(problem_.fixed.unreached_change[pose_index], 0.0),
+                                            options.spared_input_share * std::min(problem_.fixed.input_body_change[pose_index], 0.0))
+                                 : 0.0;
+  model.rhs.push_back(-body_weight * std::abs(surfaces.bind_body) * (body_change - body_target));
   if (!measure_only) {
     for (size_t p = 0; p < surfaces.parts.size(); ++p) {
       s_.body_shares[p].resize(static_cast<size_t>(surfaces.parts[p].first_share.back()));

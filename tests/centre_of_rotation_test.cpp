@@ -132,7 +132,8 @@ TEST_CASE("centres of rotation and roughness: bake --stats compares the rig with
   // Where each clip's roughest sample is lumpiest against plain skinning (pipeline/skin_place.h): a moving
   // vertex that stands further out of its neighbours' plane under the rig, at the sample the rig's
   // figure peaks. Measured at stop 53 on ArmRaise (the roughest clip): vertex 2609 of the body, under
-  // the right armpit, 7.671 mm against plain skinning's 3.428 mm.
+  // the right armpit, 7.671 mm against plain skinning's 3.428 mm; since stop 58 (the body's row spares
+  // the losses of the skin no muscle moves), vertex 2548 below it, 1.844 mm against 1.161 mm.
   for (const auto& [clip, figures] : surface.items()) {
     INFO(clip);
     const nlohmann::json& lump = figures["lumpiest_at"];
@@ -141,10 +142,10 @@ TEST_CASE("centres of rotation and roughness: bake --stats compares the rig with
     CHECK(lump["mesh"] == "Body");
   }
   const nlohmann::json& arm = surface["ArmRaise"]["lumpiest_at"];
-  CHECK(arm["vertex"] == 2609);
-  CHECK(arm["bind_position"][0].get<double>() == Approx(-0.180).margin(1e-3));
-  CHECK(arm["bind_position"][1].get<double>() == Approx(1.429).margin(1e-3));
-  CHECK(arm["rig_rise_mm"].get<double>() == Approx(7.671).margin(0.05));
-  CHECK(arm["input_rise_mm"].get<double>() == Approx(3.428).margin(0.05));
-  CHECK(bake.err.find("lumpiest at vertex 2609 of mesh 'Body'") != std::string::npos);
+  CHECK(arm["vertex"] == 2548);
+  CHECK(arm["bind_position"][0].get<double>() == Approx(-0.172).margin(1e-3));
+  CHECK(arm["bind_position"][1].get<double>() == Approx(1.416).margin(1e-3));
+  CHECK(arm["rig_rise_mm"].get<double>() == Approx(1.844).margin(0.05));
+  CHECK(arm["input_rise_mm"].get<double>() == Approx(1.161).margin(0.05));
+  CHECK(bake.err.find("lumpiest at vertex 2548 of mesh 'Body'") != std::string::npos);
 }

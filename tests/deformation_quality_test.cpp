@@ -193,7 +193,8 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   REQUIRE(bake.exit_code == 0);
   const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "f.json"))["deformation_quality"];
   // With the input's own weights validate judges the bake's regions: its exit status follows the bake's
-  // worst region (measured: the abdomen in Female_Run, 3.42 points; 0.73 before the caps paired the
+  // worst region (measured: the abdomen in Female_Run, 1.55 points; 3.42 before the body's row spared
+  // the losses of the skin no muscle moves; 0.73 before the caps paired the
   // steps where openings touch, when the abdomen was not measured). Without, other regions (measured: a
   // chest region the bake does not measure lost 1.52 points beyond the handed-back skinning).
   std::string worst_where;
@@ -233,7 +234,7 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   // Where it comes from (pipeline/region_loss_place.h). Measured at stop 53: 2.85 of the abdomen's 3.42
   // points in Female_Run at one vertex of the region's border on the right flank, whose row keeps 13 %
   // of the right latissimus and drops a 5 % joint; at 10 influences the region keeps plain skinning's
-  // volume.
+  // volume. Since stop 58 (the body's row spares the losses of the skin no muscle moves): 1.98 of 1.55.
   const nlohmann::json& abdomen = stats["regions"]["abdomen"]["per_clip"]["HumanArmature|Female_Run"];
   const nlohmann::json& place = abdomen["rig"]["lost_most_at"];
   REQUIRE(place.is_object());
@@ -242,7 +243,7 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   CHECK(place["bind_position"][0].get<double>() == Approx(-0.3128).margin(1e-3));
   CHECK(place["bind_position"][1].get<double>() == Approx(2.6953).margin(1e-3));
   CHECK(place["bind_position"][2].get<double>() == Approx(0.0320).margin(1e-3));
-  CHECK(place["points"].get<double>() == Approx(2.85).margin(0.05));
+  CHECK(place["points"].get<double>() == Approx(1.98).margin(0.05));
   // The difference it is a share of: the rig's change less plain skinning's at that sample (both peak at
   // the same sample here), and the first-order shares sum to it.
   REQUIRE(abdomen["input"]["time_s"] == abdomen["rig"]["time_s"]);
@@ -264,15 +265,16 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   }
   CHECK(located > 50);
   // The bake's region line and validate's finding name it.
-  CHECK(bake.err.find("2.85 points of it at vertex 449 of mesh 'Cylinder.005' (glTF mesh 0, primitive 0; bind position -0.313 2.695 0.032)") !=
+  CHECK(bake.err.find("1.98 points of it at vertex 449 of mesh 'Cylinder.005' (glTF mesh 0, primitive 0; bind position -0.313 2.695 0.032)") !=
         std::string::npos);
   // And the bake says what part of it the cut to 4 influences makes, which the response fit, keeping the
   // regions with the weights before the cut, could not see (measured at stop 57: 3.74 points; with the
-  // weights before the cut the abdomen changes by -12.82 %, less than plain skinning's -13.15 %).
+  // weights before the cut the abdomen changes by -12.82 %, less than plain skinning's -13.15 %; since
+  // stop 58, 1.70 points).
   REQUIRE(place.contains("cut_points"));
-  CHECK(place["cut_points"].get<double>() == Approx(-3.74).margin(0.05));
+  CHECK(place["cut_points"].get<double>() == Approx(-1.70).margin(0.05));
   CHECK(percent(abdomen, "rig") - place["cut_points"].get<double>() > percent(abdomen, "input"));
-  CHECK(bake.err.find("; 3.74 points of the loss from cutting the weights to 4 influences and rounding them") != std::string::npos);
+  CHECK(bake.err.find("; 1.70 points of the loss from cutting the weights to 4 influences and rounding them") != std::string::npos);
   // validate reads only the written weights: it cannot split the cut out.
   CHECK_FALSE(own["regions"]["abdomen"]["per_clip"]["HumanArmature|Female_Run"]["rig"]["lost_most_at"].contains("cut_points"));
   const nlohmann::json report = nlohmann::json::parse(slurp(dir / "own/report.json"));
@@ -409,7 +411,8 @@ TEST_CASE("deformation quality: joint regions, the forearm's and the clavicle's 
   CHECK(clips["ElbowFlexion"]["JORightLowerArm1"]["loss_beyond_input_points"].get<double>() ==
         Approx(forearm["loss_beyond_input_points"].get<double>()).margin(1e-6));
   CHECK(std::abs(clips["ElbowFlexion"]["JOBack3"]["input_percent"].get<double>()) < 1e-4);  // percent: rounding only
-  CHECK(clips["ArmRaise"]["JOLeftClavicle1"]["loss_beyond_input_points"].get<double>() == Approx(2.31).margin(0.05));
+  // (2.31 before the body's row spared the losses of the skin no muscle moves, stop 58.)
+  CHECK(clips["ArmRaise"]["JOLeftClavicle1"]["loss_beyond_input_points"].get<double>() == Approx(2.46).margin(0.05));
   // validate measures the same from the baked file alone (up to its 0.001 weights).
   CliResult validated = runCli("validate " + baked.glb + " --muscles " + baked.muscles + " --report " + (dir / "report"));
   INFO(validated.err);
