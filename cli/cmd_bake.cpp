@@ -465,8 +465,9 @@ void addBakeCommand(CLI::App& app, Runner* runner) {
                       "every clip frame, the frames where a region falls below joining the fit. Measured on the eight "
                       "shared characters at 4 influences: every-frame keeps every region within 1 point of plain "
                       "skinning on all 8 (fitted-poses 5; the cut to 4 influences made most of the rest), and halves "
-                      "7 of 20 arm clips (6), but 76 of 128 clips are within 1.2x plain skinning's roughness (85) and "
-                      "438 of 565 crease samples no worse (464); the first bake takes 1.3 to 1.9 times as long, and its "
+                      "11 of 20 arm clips, as fitted-poses does, but 79 of 128 clips are within 1.2x plain skinning's "
+                      "roughness (88), and as many of 565 crease samples are no worse (476); the first bake takes 1.3 to "
+                      "1.9 times as long, and its "
                       "deformation error is against the weights before the cut, which the response is no longer fitted to "
                       "(docs/deformation-quality.md, \"Every region at every frame\")")
       ->check(CLI::IsMember({"fitted-poses", "every-frame"}))
