@@ -599,9 +599,6 @@ void PoseRowBuilder::addRoughnessCap(bool measure_only, PoseRows* out) {
   }
 }
 
-// The pose's rows: the whole body's change always (weights make volumes fractions of their bind
-// volume), the regions' and the skin floors' hinges near or past their bounds. `measure_only` leaves
-// the Jacobian rows out: the last pass's would be thrown away.
 // The pose's skinning frames at the current responses, then the body's volume (returned) and each
 // region's (into region_volume).
 double PoseRowBuilder::measurePose(const RigEvaluation& evaluation, const Pose& pose, size_t pose_index,
@@ -621,6 +618,9 @@ double PoseRowBuilder::regionExcess(const runtime::MuscleRig<double>& rig, const
   return rows.region_excess;
 }
 
+// The pose's rows: the whole body's change always (weights make volumes fractions of their bind
+// volume), the regions' and the skin floors' hinges near or past their bounds. `measure_only` leaves
+// the Jacobian rows out: the last pass's would be thrown away.
 void PoseRowBuilder::build(const runtime::MuscleRig<double>& rig, const Pose& pose, size_t pose_index, bool measure_only,
                            PoseRows* out) {
   const FitSurfaces& surfaces = problem_.surfaces;
