@@ -12,14 +12,16 @@
 namespace rigbake {
 namespace {
 
+// A triangle any fitted muscle moves: one of its corners carries a fitted muscle's weight.
+bool movesWithFit(const std::array<int, 3>& t, const std::vector<char>& fitted) {
+  return fitted[t[0]] || fitted[t[1]] || fitted[t[2]];
+}
+
 SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted) {
   SplitPatch out;
   if (patch.triangles.empty()) return out;
   out.first_vertex = patch.triangles[0][0];
-  for (const auto& t : patch.triangles) {
-    const bool moves = fitted[t[0]] || fitted[t[1]] || fitted[t[2]];
-    (moves ? out.moving : out.fixed).triangles.push_back(t);
-  }
+  for (const auto& t : patch.triangles) (movesWithFit(t, fitted) ? out.moving : out.fixed).triangles.push_back(t);
   for (const std::vector<int>& hole : patch.holes) {
     const bool moves = std::any_of(hole.begin(), hole.end(), [&](int w) { return fitted[w] != 0; });
     (moves ? out.moving : out.fixed).holes.push_back(hole);
@@ -27,15 +29,13 @@ SplitPatch splitPatch(const ClosedPatch& patch, const std::vector<char>& fitted)
   return out;
 }
 
-// The whole surface's triangles with no fitted vertex, closed by caps over the loops where they meet
-// the rest (and the surface's own holes among them): a closed piece, so its volume does not depend on
-// where the body stands, and no response changes it.
+// The whole surface's triangles no fitted muscle moves (its fixed piece in splitPatch()), closed by
+// caps over the loops where they meet the rest (and the surface's own holes among them): a closed
+// piece, so its volume does not depend on where the body stands, and no response changes it.
 ClosedPatch unreachedPiece(const VolumeSurface& surface, const std::vector<char>& fitted) {
   std::vector<int> triangles;
-  for (size_t t = 0; t < surface.whole.triangles.size(); ++t) {
-    const std::array<int, 3>& c = surface.whole.triangles[t];
-    if (!fitted[c[0]] && !fitted[c[1]] && !fitted[c[2]]) triangles.push_back(static_cast<int>(t));
-  }
+  for (size_t t = 0; t < surface.whole.triangles.size(); ++t)
+    if (!movesWithFit(surface.whole.triangles[t], fitted)) triangles.push_back(static_cast<int>(t));
   return closePatch(surface, triangles);
 }
 
