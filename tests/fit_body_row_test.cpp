@@ -27,14 +27,12 @@ struct ArmChange {
 
 std::map<std::string, ArmChange> armChanges(const test::Resolved& resolved, bool spare_unreached_losses) {
   static const RomPreset rom_preset = readRomPreset(test::presetsDir() + "/rom/default.json");
-  static const RegionPreset regions = readRegionPreset(test::presetsDir() + "/regions/body.json");
   test::Resolved r = resolved;
   appendMeasureOnlyClips(&r.character, buildRom(r.character, r.landmarks, rom_preset));
   BakeOptions options;
   options.influences = 4;
   options.fit.spare_unreached_losses = spare_unreached_losses;
-  options.regions = resolveBodyRegions(r.character, r.landmarks, regions);
-  const BakeResult bake = bakeCharacter(r.character, placeMuscles(r.character, r.landmarks, test::gowPreset(), Sides::kBoth), options);
+  const BakeResult bake = test::bakeWithBodyRegions(r, options);
   std::map<std::string, ArmChange> out;
   for (const ClipQuality& clip : bake.quality.clips) {
     for (const char* arm : {"rom_elbow_flexion", "rom_shoulder_abduction", "rom_shoulder_flexion"})

@@ -267,12 +267,10 @@ TEST_CASE("seams: with the every-frame region fit a character split into one mes
     addArmRom(&r);
     const SplitCharacter split = splitByDominantJoint(r.character);
     REQUIRE(split.character.meshes.size() >= r.character.meshes.size() + 5);
-    static const RegionPreset regions = readRegionPreset(test::presetsDir() + "/regions/body.json");
     BakeOptions options;
     options.influences = 4;
     options.fit.every_frame_regions = true;
-    options.regions = resolveBodyRegions(split.character, r.landmarks, regions);
-    const BakeResult bake = bakeCharacter(split.character, placeMuscles(split.character, r.landmarks, test::gowPreset(), Sides::kBoth), options);
+    const BakeResult bake = test::bakeWithBodyRegions(test::Resolved{split.character, r.landmarks}, options);
     CHECK(checkSeamsClosed(bake) > 100);
     double worst = 0.0;
     for (const ClipQuality& clip : bake.quality.clips)
