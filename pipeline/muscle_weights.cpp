@@ -30,11 +30,32 @@ Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& p, const Eigen::Vector3d
   return a + ab * t;
 }
 
+// Where `p` projects on the line through segment ab: 0 at a, 1 at b, beyond them outside [0, 1].
+double alongSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d ab = b - a;
+  const double length_squared = ab.squaredNorm();
+  return length_squared > 0 ? (p - a).dot(ab) / length_squared : 0.5;
+}
+
 // Smoothstep from facing_start (no share) to facing_full (all of it) on the cosine between the
 // vertex's direction from the muscle's axis and the muscle's up axis.
 double sideFactor(double facing, const MuscleWeightOptions& options) {
   const double x = std::clamp((facing - options.facing_start) / (options.facing_full - options.facing_start), 0.0, 1.0);
   return x * x * (3.0 - 2.0 * x);
+}
+
+// A muscle's belly bulges; over its tendons, at its ends, the skin moves with the bones they attach to,
+// which the muscle's skinned joint (riding one carrier joint) does not follow. So the share is all of
+// it over the belly and fades by a smoothstep over the last `tendon_fraction` of the origin-insertion
+// segment at each end, none beyond either end (where the falloff's round end caps reach without it).
+// `along`: the vertex's position projected on the segment, 0 at the origin, 1 at the insertion.
+double tendonFactor(double along, double tendon_fraction) {
+  if (tendon_fraction <= 0.0) return 1.0;
+  auto rise = [&](double x) {
+    x = std::clamp(x / tendon_fraction, 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+  };
+  return rise(along) * rise(1.0 - along);
 }
 
 // How far from all of a vertex's weight its strongest joint may be and still hold it alone: the 0.001
@@ -261,7 +282,8 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
       const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);
       const Eigen::Vector3d away = p - closest;
       const double facing = away.norm() > 0.0 ? away.normalized().dot(up) : 1.0;
-      const double share = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options));
+      const double tendon = tendonFactor(alongSegment(p, muscle.origin.world, muscle.insertion.world), options.tendon_fraction);
+      const double share = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options) * tendon);
       if (share == 0.0) continue;
       work.field[w] = share;
       work.active.push_back(w);
