@@ -324,7 +324,10 @@ void chooseCarrierJoints(const Character& character, const BodySurface& body, co
   const size_t joint_count = static_cast<size_t>(skeleton.size());
   // mass[m][j]: the weight of joint j under muscle m's share field, summed vertex by vertex (part after
   // part) and slot by slot, over the joints the muscle spans (the order of each sum is the order a
-  // muscle-by-muscle loop would take).
+  // muscle-by-muscle loop would take). Each welded vertex weighs once, at its first copy: UV seams and the
+  // borders of a character built from several meshes copy vertices, and a split into more meshes copies
+  // more, which must not tip a near tie (measured on CesiumMan: its right latissimus carried by the torso
+  // where the left one rides the upper arm, and 0.34 of a vertex's weight moved by a split).
   std::vector<double> mass(muscle_count * joint_count, 0.0);
   std::vector<char> spans(muscle_count * joint_count, 0);
   const std::vector<int>& parents = spannedHierarchy(*muscles, skeleton);
@@ -333,8 +336,11 @@ void chooseCarrierJoints(const Character& character, const BodySurface& body, co
   const MeshPart& skin = body.skin(character);
   const std::vector<int>& weld = body.graph.weld_of_vertex;
   const int slots = skin.influences_per_vertex;
+  std::vector<char> counted(static_cast<size_t>(body.graph.weldedCount()), 0);
   for (size_t v = 0; v < skin.positions.size(); ++v) {
     const int w = weld[v];
+    if (counted[w]) continue;
+    counted[w] = 1;
     for (std::uint32_t i = shares.first[w]; i < shares.first[w + 1]; ++i) {
       const size_t m = static_cast<size_t>(shares.muscle[i]);
       const double s = shares.share[i];

@@ -491,12 +491,13 @@ TEST_CASE("cli bake: a body region that loses more than validate allows is named
   const CliResult r = runCli("bake " + cesium + " --rom --influences 10 -o " + (dir / "baked.glb"));
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
-  // Measured: CesiumMan's abdomen loses 1.13 points more than under plain skinning at full shoulder
-  // flexion (docs/deformation-quality.md; before the body's row spared the losses of the skin no muscle
+  // Measured: CesiumMan's abdomen loses 1.14 points more than under plain skinning at full shoulder
+  // flexion (docs/deformation-quality.md; 1.13 before each welded vertex weighed once in the choice of
+  // the muscles' carriers, which gives its right latissimus the upper arm as the left one; before the body's row spared the losses of the skin no muscle
   // moves, its back 1.66 points at full elbow flexion, and 1.86 before the caps paired the steps where
   // openings touch and a compression key's bound fell towards rest). The bake says so before validate
   // fails on it.
-  const size_t line = r.err.find("body region losing most beyond plain skinning: 'abdomen' in 'rom_shoulder_flexion', 1.13");
+  const size_t line = r.err.find("body region losing most beyond plain skinning: 'abdomen' in 'rom_shoulder_flexion', 1.14");
   REQUIRE(line != std::string::npos);
   const std::string text = r.err.substr(line, r.err.find('\n', line) - line);
   const std::string clause = "; more than the 1 point `rigbake validate` allows by default (SKIN_REGION_VOLUME_LOSS, an error)";

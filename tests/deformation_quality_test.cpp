@@ -193,20 +193,26 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   REQUIRE(bake.exit_code == 0);
   const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "f.json"))["deformation_quality"];
   // With the input's own weights validate judges the bake's regions: its exit status follows the bake's
-  // worst region (measured: the abdomen in Female_Run, 1.55 points; 3.42 before the body's row spared
-  // the losses of the skin no muscle moves; 0.73 before the caps paired the
-  // steps where openings touch, when the abdomen was not measured). Without, other regions (measured: a
-  // chest region the bake does not measure lost 1.52 points beyond the handed-back skinning).
+  // worst region (measured: elbow_r in Female_Death, 0.95 points; the abdomen in Female_Run, 1.55, before
+  // each welded vertex weighed once in the choice of the muscles' carriers, which gives the right
+  // latissimus the torso instead of the abdomen; 3.42 before the body's row spared the losses of the skin no
+  // muscle moves; 0.73 before the caps paired the steps where openings touch, when the abdomen was not
+  // measured). Without, other regions, and the exit status its own report's worst region says
+  // (measured: 20 regions, the worst elbow_r in Female_Death at 0.99 points; before, a chest region the
+  // bake does not measure lost 1.52 points beyond the handed-back skinning).
   std::string worst_where;
   const int own_exit = worstRegionLoss(stats, &worst_where) > 1.0 ? 4 : 0;
+  // exit_code < 0: the one the report's own worst region calls for.
   const auto validated = [&](const std::string& extra, const std::string& name, int exit_code) {
     const CliResult run = runCli("validate " + (dir / "f.glb") + " --rom --no-pictures " + extra + " --report " + (dir / name));
     INFO(run.err);
-    CHECK(run.exit_code == exit_code);
-    return nlohmann::json::parse(slurp(dir / (name + "/report.json")))["deformation_quality"];
+    const nlohmann::json quality = nlohmann::json::parse(slurp(dir / (name + "/report.json")))["deformation_quality"];
+    std::string where;
+    CHECK(run.exit_code == (exit_code >= 0 ? exit_code : worstRegionLoss(quality, &where) > 1.0 ? 4 : 0));
+    return quality;
   };
   const nlohmann::json own = validated("--input " + input, "own", own_exit);
-  const nlohmann::json handed_back = validated("", "handed_back", 4);
+  const nlohmann::json handed_back = validated("", "handed_back", -1);
   CHECK(own["input_weights_from"] == "Female_Casual.fbx");
   CHECK(handed_back["input_weights_from"].is_null());
   // The same regions, plain skinning's figures to the bit, the rig's to 0.005 points (the bake samples its
@@ -235,15 +241,19 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
   // points in Female_Run at one vertex of the region's border on the right flank, whose row keeps 13 %
   // of the right latissimus and drops a 5 % joint; at 10 influences the region keeps plain skinning's
   // volume. Since stop 58 (the body's row spares the losses of the skin no muscle moves): 1.98 of 1.55.
+  // Since stop 59 (each welded vertex weighs once in the carriers' choice: the right latissimus rides
+  // the torso, not the abdomen, a near tie on this body, where the left one still takes the abdomen) the
+  // abdomen loses 0.23 points there, 0.18 of them at vertex 412 on the front, and the cut to 4
+  // influences 0.24.
   const nlohmann::json& abdomen = stats["regions"]["abdomen"]["per_clip"]["HumanArmature|Female_Run"];
   const nlohmann::json& place = abdomen["rig"]["lost_most_at"];
   REQUIRE(place.is_object());
   CHECK(place["mesh"] == "Cylinder.005");
-  CHECK(place["vertex"] == 449);
-  CHECK(place["bind_position"][0].get<double>() == Approx(-0.3128).margin(1e-3));
-  CHECK(place["bind_position"][1].get<double>() == Approx(2.6953).margin(1e-3));
-  CHECK(place["bind_position"][2].get<double>() == Approx(0.0320).margin(1e-3));
-  CHECK(place["points"].get<double>() == Approx(1.98).margin(0.05));
+  CHECK(place["vertex"] == 412);
+  CHECK(place["bind_position"][0].get<double>() == Approx(-0.2337).margin(1e-3));
+  CHECK(place["bind_position"][1].get<double>() == Approx(3.0236).margin(1e-3));
+  CHECK(place["bind_position"][2].get<double>() == Approx(0.2010).margin(1e-3));
+  CHECK(place["points"].get<double>() == Approx(0.18).margin(0.05));
   // The difference it is a share of: the rig's change less plain skinning's at that sample (both peak at
   // the same sample here), and the first-order shares sum to it.
   REQUIRE(abdomen["input"]["time_s"] == abdomen["rig"]["time_s"]);
@@ -264,26 +274,58 @@ TEST_CASE("validate --input: on Female Casual at 4 influences (ROM clips) the re
     }
   }
   CHECK(located > 50);
-  // The bake's region line and validate's finding name it.
-  CHECK(bake.err.find("1.98 points of it at vertex 449 of mesh 'Cylinder.005' (glTF mesh 0, primitive 0; bind position -0.313 2.695 0.032)") !=
+  // The bake's region line names the worst region's place (measured: elbow_r in Female_Death, 1.76 of
+  // its 0.95 points at vertex 927, the rest of the region giving some back); there the cut to 4
+  // influences gains volume (0.82 points), so the line does not blame it. At the abdomen in Female_Run
+  // the cut gains 0.24 points too (it made 1.70 of the abdomen's 1.55 points at stop 58, 3.74 at stop
+  // 57; the cut's share of a loss is held on Male Casual, next case).
+  CHECK(bake.err.find("'elbow_r' in 'HumanArmature|Female_Death', 0.95 points") != std::string::npos);
+  CHECK(bake.err.find("1.76 points of it at vertex 927 of mesh 'Cylinder.005' (glTF mesh 0, primitive 1; bind position -1.101 3.572 0.064)") !=
         std::string::npos);
-  // And the bake says what part of it the cut to 4 influences makes, which the response fit, keeping the
-  // regions with the weights before the cut, could not see (measured at stop 57: 3.74 points; with the
-  // weights before the cut the abdomen changes by -12.82 %, less than plain skinning's -13.15 %; since
-  // stop 58, 1.70 points).
+  CHECK(bake.err.find("points of the loss from cutting") == std::string::npos);
   REQUIRE(place.contains("cut_points"));
-  CHECK(place["cut_points"].get<double>() == Approx(-1.70).margin(0.05));
-  CHECK(percent(abdomen, "rig") - place["cut_points"].get<double>() > percent(abdomen, "input"));
-  CHECK(bake.err.find("; 1.70 points of the loss from cutting the weights to 4 influences and rounding them") != std::string::npos);
+  CHECK(place["cut_points"].get<double>() == Approx(0.24).margin(0.05));
   // validate reads only the written weights: it cannot split the cut out.
   CHECK_FALSE(own["regions"]["abdomen"]["per_clip"]["HumanArmature|Female_Run"]["rig"]["lost_most_at"].contains("cut_points"));
-  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "own/report.json"));
+}
+
+// Where a region over validate's line loses it, and how much of it the cut to 4 influences makes, which
+// the response fit (keeping the regions with the weights before the cut) cannot see: Male Casual's left
+// hip in Man_Punch (docs/deformation-quality.md, "Where a region loses it").
+TEST_CASE("deformation quality: Male Casual's hip at 4 influences, the place that loses it and the cut's share, on the bake's line and validate's finding") {
+  const std::string input = requireAsset("fbx/Male_Casual.fbx");
+  if (input.empty()) return;
+  TempDir dir;
+  const CliResult bake = runCli("bake " + input + " --rom --influences 4 -o " + (dir / "m.glb") + " --stats " + (dir / "m.json"));
+  INFO(bake.err);
+  REQUIRE(bake.exit_code == 0);
+  const nlohmann::json stats = nlohmann::json::parse(slurp(dir / "m.json"))["deformation_quality"];
+  // Measured: 3.02 points beyond plain skinning (-30.62 % against -33.65 %), 2.64 of them at vertex 16 on
+  // the pelvis's midline border, 2.86 of them the cut's (stop 57: 2.12, 2.66 and 1.86; before the cut
+  // the region loses 0.17 points).
+  const nlohmann::json& hip = stats["regions"]["hip_l"]["per_clip"]["HumanArmature|Man_Punch"];
+  const nlohmann::json& place = hip["rig"]["lost_most_at"];
+  REQUIRE(place.is_object());
+  CHECK(percent(hip, "input") - percent(hip, "rig") == Approx(3.02).margin(0.05));
+  CHECK(place["mesh"] == "Cylinder.002");
+  CHECK(place["vertex"] == 16);
+  CHECK(place["points"].get<double>() == Approx(2.64).margin(0.05));
+  CHECK(place["cut_points"].get<double>() == Approx(-2.86).margin(0.05));
+  CHECK(-place["cut_points"].get<double>() > 0.5 * (percent(hip, "input") - percent(hip, "rig")));  // the cut makes most of it
+  CHECK(bake.err.find("'hip_l' in 'HumanArmature|Man_Punch', 3.02 points") != std::string::npos);
+  CHECK(bake.err.find("2.64 points of it at vertex 16 of mesh 'Cylinder.002' (glTF mesh 0, primitive 2; bind position 0.070 2.233 -0.010); "
+                      "2.86 points of the loss from cutting the weights to 4 influences and rounding them") != std::string::npos);
+  // validate, with the input's own weights, fails on it and names the same place.
+  const CliResult validated = runCli("validate " + (dir / "m.glb") + " --rom --no-pictures --input " + input + " --report " + (dir / "report"));
+  INFO(validated.err);
+  CHECK(validated.exit_code == 4);
+  const nlohmann::json report = nlohmann::json::parse(slurp(dir / "report/report.json"));
   bool named = false;
   for (const nlohmann::json& check : report["checks"]) {
     if (check["code"] != "SKIN_REGION_VOLUME_LOSS") continue;
     for (const nlohmann::json& finding : check["findings"])
-      named = named || (finding["location"] == "HumanArmature|Female_Run/abdomen" &&
-                        finding["message"].get<std::string>().find("at vertex 449 of mesh 'Cylinder.005'") != std::string::npos);
+      named = named || (finding["location"] == "HumanArmature|Man_Punch/hip_l" &&
+                        finding["message"].get<std::string>().find("at vertex 16 of mesh 'Cylinder.002'") != std::string::npos);
   }
   CHECK(named);
 }
