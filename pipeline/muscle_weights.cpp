@@ -16,25 +16,20 @@
 namespace rigbake {
 namespace {
 
-double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  Eigen::Vector3d ab = b - a;
-  double length_squared = ab.squaredNorm();
-  double t = length_squared > 0 ? std::clamp((p - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
-  return (p - (a + ab * t)).norm();
-}
-
-Eigen::Vector3d closestOnSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d ab = b - a;
-  const double length_squared = ab.squaredNorm();
-  const double t = length_squared > 0 ? std::clamp((p - a).dot(ab) / length_squared, 0.0, 1.0) : 0.0;
-  return a + ab * t;
-}
-
 // Where `p` projects on the line through segment ab: 0 at a, 1 at b, beyond them outside [0, 1].
 double alongSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   const Eigen::Vector3d ab = b - a;
   const double length_squared = ab.squaredNorm();
   return length_squared > 0 ? (p - a).dot(ab) / length_squared : 0.5;
+}
+
+// The point of segment ab at `along` (alongSegment()), clamped to the segment.
+Eigen::Vector3d pointOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double along) {
+  return a + (b - a) * std::clamp(along, 0.0, 1.0);
+}
+
+double distanceToSegment(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return (p - pointOnSegment(a, b, alongSegment(p, a, b))).norm();
 }
 
 // Smoothstep from facing_start (no share) to facing_full (all of it) on the cosine between the
@@ -279,10 +274,11 @@ MuscleShares muscleShares(const Skeleton& skeleton, const MeshPart& part, const 
       if (rigid[w]) continue;
       const Eigen::Vector3d& p = welded_position[w];
       if ((p.array() < low.array()).any() || (p.array() > high.array()).any()) continue;
-      const Eigen::Vector3d closest = closestOnSegment(p, muscle.origin.world, muscle.insertion.world);
-      const Eigen::Vector3d away = p - closest;
+      // One projection on the segment for the distance across it and the place along it.
+      const double along = alongSegment(p, muscle.origin.world, muscle.insertion.world);
+      const Eigen::Vector3d away = p - pointOnSegment(muscle.origin.world, muscle.insertion.world, along);
       const double facing = away.norm() > 0.0 ? away.normalized().dot(up) : 1.0;
-      const double tendon = tendonFactor(alongSegment(p, muscle.origin.world, muscle.insertion.world), options.tendon_fraction);
+      const double tendon = tendonFactor(along, options.tendon_fraction);
       const double share = options.peak_share * falloff(away.norm(), radii[m]) * (corrective ? 1.0 : sideFactor(facing, options) * tendon);
       if (share == 0.0) continue;
       work.field[w] = share;
